@@ -1,0 +1,2 @@
+// Anchors the nav_test_support library (its helpers are header-only; see nav/testing/).
+#include "nav/testing/data.h"

@@ -1,0 +1,16 @@
+#include <ctime>
+
+#include "nav/drivers/time/timestamps.h"
+
+namespace nav::drivers {
+namespace {
+int64_t read_us(clockid_t clock) {
+  timespec ts{};
+  clock_gettime(clock, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1'000;
+}
+}  // namespace
+
+HostTime host_time_now() { return {read_us(CLOCK_MONOTONIC), read_us(CLOCK_REALTIME)}; }
+
+}  // namespace nav::drivers
