@@ -65,6 +65,7 @@ class GigeCameraLoopback : public ::testing::Test {
     return o;
   }
 
+  nav::testing::LoopbackCameraLock lock_;  // first member: taken before the fake starts
   std::string serial_;
   ArvGvFakeCamera* gv_ = nullptr;
   size_t capacity_ = 0;
@@ -126,6 +127,7 @@ class FakeGvProcess {
 TEST(GigeCameraLoss, DroppedPacketsAreCountedAsIncompleteBuffers) {
   if (std::string(NAV_ARV_FAKE_GV_CAMERA).empty()) GTEST_SKIP() << "arv-fake-gv-camera-0.8 not found at configure time";
   const std::string serial = "NAVLOSS" + std::to_string(::getpid() % 100000);
+  nav::testing::LoopbackCameraLock lock;
   FakeGvProcess fake(serial, 20);  // 2 % of GVSP packets lost, resends never answered
   ASSERT_TRUE(fake.started());
   std::this_thread::sleep_for(300ms);

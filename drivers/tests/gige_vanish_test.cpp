@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "nav/drivers/transports/gige_camera.h"
+#include "nav/testing/fake_camera_pattern.h"
 
 namespace nav::drivers {
 namespace {
@@ -18,6 +19,7 @@ namespace {
 using namespace std::chrono_literals;
 
 TEST(GigeCameraVanish, CameraVanishingMidStreamIsReportedAsDisconnected) {
+  nav::testing::LoopbackCameraLock lock;
   ArvGvFakeCamera* gv = arv_gv_fake_camera_new("lo", "NAVVANISH");
   if (gv == nullptr || !arv_gv_fake_camera_is_running(gv)) {
     if (gv != nullptr) g_object_unref(gv);

@@ -4,6 +4,9 @@
 // and verifies pixels, frame ids (with gaps) and time stamps.
 
 #include <arv.h>
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstring>
@@ -98,5 +101,22 @@ inline void expect_pattern_stream(GigeCamera& camera, PixelFormat format, int n,
     EXPECT_TRUE(wrapped) << "block id never wrapped past 65535";
   }
 }
+
+/// Serialises tests that run a GigE fake camera on loopback: two fakes bound to 127.0.0.1:3956
+/// (ctest -j) would answer each other's control packets. Held for the lifetime of the object.
+class LoopbackCameraLock {
+ public:
+  LoopbackCameraLock() : fd_(::open("/tmp/navd-gige-loopback.lock", O_RDWR | O_CREAT | O_CLOEXEC, 0666)) {
+    if (fd_ >= 0) (void)::flock(fd_, LOCK_EX);
+  }
+  ~LoopbackCameraLock() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  LoopbackCameraLock(const LoopbackCameraLock&) = delete;
+  LoopbackCameraLock& operator=(const LoopbackCameraLock&) = delete;
+
+ private:
+  int fd_;
+};
 
 }  // namespace nav::testing
