@@ -2,16 +2,15 @@
 // (the receive path of a PF_CAN socket: framing, filters, error frames, timestamps), and on a
 // real SocketCAN interface where the kernel has one (skipped with the reason otherwise).
 
+#include <gtest/gtest.h>
 #include <linux/can.h>
 #include <linux/can/error.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <cerrno>
-#include <cstring>
 #include <cstdlib>
-
-#include <gtest/gtest.h>
+#include <cstring>
 
 #include "nav/drivers/transports/can_bus.h"
 
@@ -97,7 +96,8 @@ TEST_F(CanSocketpair, RemoteFramesKeepTheirFlag) {
 TEST_F(CanSocketpair, FiltersSkipAndCountOtherIds) {
   const CanFilter only_dvl[] = {{0x100, 0x700, false}};
   ASSERT_TRUE(rx_.set_filters(only_dvl).ok());
-  for (uint32_t id : {0x123u, 0x223u, 0x1FFu}) ASSERT_TRUE(tx_.send(make_frame(id, {7}), 100ms).ok());
+  for (uint32_t id : {0x123u, 0x223u, 0x1FFu})
+    ASSERT_TRUE(tx_.send(make_frame(id, {7}), 100ms).ok());
   CanFrame got;
   ASSERT_TRUE(rx_.receive(got, 1s).ok());
   EXPECT_EQ(got.id, 0x123u);

@@ -4,17 +4,17 @@
 // test serves itself (arv_fake_camera_set_fill_pattern), and 16-bit block-id wrap-around (the
 // fake starts its ids at 65400). The GigE-on-loopback cases are in gige_loopback_test.cpp.
 
+#include "nav/drivers/transports/gige_camera.h"
+
 #include <arv.h>
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
+#include <opencv2/core.hpp>
 #include <string>
 
-#include <gtest/gtest.h>
-#include <opencv2/core.hpp>
-
-#include "nav/drivers/transports/gige_camera.h"
 #include "nav/testing/fake_camera_pattern.h"
 
 namespace nav::drivers {
@@ -108,10 +108,13 @@ std::filesystem::path write_mono12_genicam() {
   const std::string anchor = "<pValue>PixelFormatRegister</pValue>";
   const auto at = xml.find(anchor);
   if (at == std::string::npos) return {};
-  xml.insert(at,
-             "<EnumEntry Name=\"Mono12\" NameSpace=\"Standard\"><Value>17825797</Value></EnumEntry>\n"
-             "<EnumEntry Name=\"Mono12Packed\" NameSpace=\"Standard\"><Value>17563654</Value></EnumEntry>\n");
-  const auto path = std::filesystem::temp_directory_path() / ("navd_fake_mono12_" + std::to_string(::getpid()) + ".xml");
+  xml.insert(
+      at,
+      "<EnumEntry Name=\"Mono12\" NameSpace=\"Standard\"><Value>17825797</Value></EnumEntry>\n"
+      "<EnumEntry Name=\"Mono12Packed\" "
+      "NameSpace=\"Standard\"><Value>17563654</Value></EnumEntry>\n");
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("navd_fake_mono12_" + std::to_string(::getpid()) + ".xml");
   std::ofstream(path) << xml;
   return path;
 }
@@ -125,7 +128,7 @@ TEST_F(GigeCameraFake, TwelveBitFormatsThroughACustomGenicamDescription) {
     const IoStatus s = camera.open();
     ASSERT_TRUE(s.ok()) << s.message();
     size_t capacity = 0;
-  serve_pattern(camera, capacity);
+    serve_pattern(camera, capacity);
     ASSERT_TRUE(camera.start().ok());
     expect_pattern_stream(camera, format, 4, false);
   }
@@ -135,4 +138,3 @@ TEST_F(GigeCameraFake, TwelveBitFormatsThroughACustomGenicamDescription) {
 
 }  // namespace
 }  // namespace nav::drivers
-

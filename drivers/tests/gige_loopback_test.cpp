@@ -4,6 +4,7 @@
 // as incomplete buffers. Skips with the reason when the fake cannot listen on lo.
 
 #include <arv.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -11,8 +12,6 @@
 #include <memory>
 #include <string>
 #include <thread>
-
-#include <gtest/gtest.h>
 
 #include "nav/drivers/transports/gige_camera.h"
 #include "nav/testing/fake_camera_pattern.h"
@@ -44,7 +43,8 @@ class GigeCameraLoopback : public ::testing::Test {
     if (gv_ == nullptr || !arv_gv_fake_camera_is_running(gv_)) {
       GTEST_SKIP() << "the Aravis GigE fake camera cannot listen on interface lo here";
     }
-    arv_fake_camera_set_fill_pattern(arv_gv_fake_camera_get_fake_camera(gv_), fill_test_pattern, &capacity_);
+    arv_fake_camera_set_fill_pattern(arv_gv_fake_camera_get_fake_camera(gv_), fill_test_pattern,
+                                     &capacity_);
   }
   /// Opens camera_ and sizes the pattern for the payload of the chosen pixel format.
   IoStatus open(const GigeOptions& o) {
@@ -102,8 +102,8 @@ class FakeGvProcess {
     pid_ = ::fork();
     if (pid_ == 0) {
       const std::string ratio = std::to_string(lost_per_thousand);
-      ::execl(NAV_ARV_FAKE_GV_CAMERA, NAV_ARV_FAKE_GV_CAMERA, "-i", "127.0.0.1", "-s", serial.c_str(), "-r",
-              ratio.c_str(), static_cast<char*>(nullptr));
+      ::execl(NAV_ARV_FAKE_GV_CAMERA, NAV_ARV_FAKE_GV_CAMERA, "-i", "127.0.0.1", "-s",
+              serial.c_str(), "-r", ratio.c_str(), static_cast<char*>(nullptr));
       ::_exit(127);
     }
   }
@@ -125,13 +125,15 @@ class FakeGvProcess {
 };
 
 TEST(GigeCameraLoss, DroppedPacketsAreCountedAsIncompleteBuffers) {
-  if (std::string(NAV_ARV_FAKE_GV_CAMERA).empty()) GTEST_SKIP() << "arv-fake-gv-camera-0.8 not found at configure time";
+  if (std::string(NAV_ARV_FAKE_GV_CAMERA).empty())
+    GTEST_SKIP() << "arv-fake-gv-camera-0.8 not found at configure time";
   const std::string serial = "NAVLOSS" + std::to_string(::getpid() % 100000);
   nav::testing::LoopbackCameraLock lock;
   FakeGvProcess fake(serial, 20);  // 2 % of GVSP packets lost, resends never answered
   ASSERT_TRUE(fake.started());
   std::this_thread::sleep_for(300ms);
-  if (fake.exited()) GTEST_SKIP() << "arv-fake-gv-camera-0.8 exited at once (GVCP port 3956 on lo busy?)";
+  if (fake.exited())
+    GTEST_SKIP() << "arv-fake-gv-camera-0.8 exited at once (GVCP port 3956 on lo busy?)";
   GigeOptions o = fake_options(PixelFormat::kMono16);
   o.camera_id = "127.0.0.1";
   o.frame_rate_hz = 100.0;

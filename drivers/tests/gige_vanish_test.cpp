@@ -4,11 +4,10 @@
 // takes about 15 s (Aravis' fixed heartbeat retry schedule), hence its own executable.
 
 #include <arv.h>
+#include <gtest/gtest.h>
 
 #include <memory>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "nav/drivers/transports/gige_camera.h"
 #include "nav/testing/fake_camera_pattern.h"

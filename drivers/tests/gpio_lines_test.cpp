@@ -2,12 +2,12 @@
 // missed edges, stuck lines and clock steps), the in-memory loopback, options validation, and
 // the libgpiod implementation where a /dev/gpiochip* exists (skipped with the reason otherwise).
 
-#include <filesystem>
-#include <thread>
+#include "nav/drivers/transports/gpio_lines.h"
 
 #include <gtest/gtest.h>
 
-#include "nav/drivers/transports/gpio_lines.h"
+#include <filesystem>
+#include <thread>
 
 namespace nav::drivers {
 namespace {
@@ -33,7 +33,7 @@ TEST(StrobePulseDecoder, MissedEdgesAreCountedNotMispaired) {
   d.feed(edge(true, 9'000));  // falling edge of the first pulse lost
   const auto p = d.feed(edge(false, 10'000));
   ASSERT_TRUE(p.has_value());
-  EXPECT_EQ(p->start_us, 9'000);  // paired with the latest rising edge only
+  EXPECT_EQ(p->start_us, 9'000);                          // paired with the latest rising edge only
   EXPECT_FALSE(d.feed(edge(false, 11'000)).has_value());  // falling without rising
   EXPECT_EQ(d.stats().orphan_edges, 2u);
   EXPECT_EQ(d.stats().pulses, 1u);
@@ -97,7 +97,8 @@ TEST(GpiodLines, MissingChipIsReportedWithItsPath) {
 TEST(GpiodLines, DrivesAndReadsARealChip) {
   const char* env = std::getenv("NAV_GPIO_CHIP");
   const std::string chip = env != nullptr ? env : "/dev/gpiochip0";
-  if (!std::filesystem::exists(chip)) GTEST_SKIP() << "no GPIO chip " << chip << " on this machine (set NAV_GPIO_CHIP)";
+  if (!std::filesystem::exists(chip))
+    GTEST_SKIP() << "no GPIO chip " << chip << " on this machine (set NAV_GPIO_CHIP)";
   GpioOptions o;
   o.chip = chip;
   o.trigger_line = 0;

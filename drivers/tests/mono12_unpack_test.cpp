@@ -3,11 +3,10 @@
 // short buffers, and pack/unpack round trips over many shapes.
 
 #include <arv.h>
-
-#include <random>
-
 #include <gtest/gtest.h>
+
 #include <opencv2/core.hpp>
+#include <random>
 
 #include "nav/drivers/transports/mono_unpack.h"
 
@@ -17,7 +16,8 @@ namespace {
 std::vector<uint16_t> pixels(const cv::Mat& m) {
   std::vector<uint16_t> v;
   for (int r = 0; r < m.rows; ++r) {
-    for (int c = 0; c < m.cols; ++c) v.push_back(m.type() == CV_8UC1 ? m.at<uint8_t>(r, c) : m.at<uint16_t>(r, c));
+    for (int c = 0; c < m.cols; ++c)
+      v.push_back(m.type() == CV_8UC1 ? m.at<uint8_t>(r, c) : m.at<uint16_t>(r, c));
   }
   return v;
 }
@@ -128,8 +128,10 @@ TEST(Mono12Unpack, PackUnpackRoundTripsEveryFormatWidthAndPadding) {
         for (int r = 0; r < 5; ++r) {
           for (int c = 0; c < width; ++c) {
             const int v = static_cast<int>(rng() % static_cast<unsigned>(max_value + 1));
-            if (f == PixelFormat::kMono8) image.at<uint8_t>(r, c) = static_cast<uint8_t>(v);
-            else image.at<uint16_t>(r, c) = static_cast<uint16_t>(v);
+            if (f == PixelFormat::kMono8)
+              image.at<uint8_t>(r, c) = static_cast<uint8_t>(v);
+            else
+              image.at<uint16_t>(r, c) = static_cast<uint16_t>(v);
           }
         }
         const std::vector<uint8_t> bytes = pack_mono(image, layout);

@@ -3,7 +3,10 @@
 // comes back under the same path (a symlink re-pointed to a new pty, as udev does for
 // /dev/serial/by-id links when a USB-serial adapter is re-plugged).
 
+#include "nav/drivers/transports/serial_port.h"
+
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <poll.h>
 #include <pty.h>
 #include <termios.h>
@@ -14,10 +17,6 @@
 #include <random>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
-
-#include "nav/drivers/transports/serial_port.h"
 
 namespace nav::drivers {
 namespace {
@@ -174,13 +173,14 @@ TEST(SerialPort, CarriesDataBothWaysUntranslated) {
   SerialPort port(options_for(pty.slave_path()));
   ASSERT_TRUE(port.open().ok());
   // CR, LF, XON/XOFF, ^C and 0xFF must pass untouched in raw mode.
-  const std::string sensor_bytes = std::string("$HEHDT,123.4,T*2F\r\n") + '\x11' + '\x13' + '\x03' +
-                                   '\xff' + '\0';
+  const std::string sensor_bytes =
+      std::string("$HEHDT,123.4,T*2F\r\n") + '\x11' + '\x13' + '\x03' + '\xff' + '\0';
   pty.send(sensor_bytes);
   EXPECT_EQ(read_n(port, sensor_bytes.size(), 2s), sensor_bytes);
 
   const std::string command = "*0100P3\r\n";  // a Paroscientific poll command
-  ASSERT_TRUE(port.write({reinterpret_cast<const uint8_t*>(command.data()), command.size()}, 1s).ok());
+  ASSERT_TRUE(
+      port.write({reinterpret_cast<const uint8_t*>(command.data()), command.size()}, 1s).ok());
   EXPECT_EQ(pty.receive(command.size(), 2s), command);
   EXPECT_EQ(port.stats().bytes_written, command.size());
   EXPECT_EQ(port.stats().bytes_read, sensor_bytes.size());

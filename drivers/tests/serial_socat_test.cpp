@@ -5,6 +5,7 @@
 // Skips with the reason when socat is not installed.
 
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <poll.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -15,8 +16,6 @@
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "nav/drivers/transports/serial_port.h"
 
@@ -79,7 +78,9 @@ class SensorEnd {
     if (fd_ >= 0) ::close(fd_);
   }
   bool ok() const { return fd_ >= 0; }
-  void send(const std::string& s) const { ASSERT_EQ(::write(fd_, s.data(), s.size()), static_cast<ssize_t>(s.size())); }
+  void send(const std::string& s) const {
+    ASSERT_EQ(::write(fd_, s.data(), s.size()), static_cast<ssize_t>(s.size()));
+  }
   std::string receive(std::size_t n) const {
     std::string out;
     for (int i = 0; i < 100 && out.size() < n; ++i) {

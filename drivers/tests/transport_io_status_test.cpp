@@ -1,9 +1,9 @@
 // IoStatus: errno classification (which failures mean "device vanished", "busy", "no kernel
 // support") and messages that name the device, the operation and the errno text.
 
-#include <cerrno>
-
 #include <gtest/gtest.h>
+
+#include <cerrno>
 
 #include "nav/drivers/transports/io_status.h"
 

@@ -3,14 +3,13 @@
 // paths that work without a camera (missing node, a node that is not V4L2); the real capture
 // test skips with the reason when there is no /dev/video*.
 
+#include "nav/drivers/transports/v4l2_camera.h"
+
+#include <gtest/gtest.h>
 #include <linux/videodev2.h>
 
 #include <filesystem>
-
-#include <gtest/gtest.h>
 #include <opencv2/core.hpp>
-
-#include "nav/drivers/transports/v4l2_camera.h"
 
 namespace nav::drivers {
 namespace {
@@ -61,19 +60,21 @@ class V4l2Buffers : public ::testing::Test {
  protected:
   // 3x2 Y12 image with 2 padding bytes per line (bytesperline 8): words little endian.
   // line 0: 0x001 0x7FF 0xFFF, line 1: 0x123 0x456 0x789
-  const std::vector<uint8_t> bytes_{0x01, 0x00, 0xFF, 0x07, 0xFF, 0x0F, 0xAA, 0xAA,
-                                    0x23, 0x01, 0x56, 0x04, 0x89, 0x07};
+  const std::vector<uint8_t> bytes_{0x01, 0x00, 0xFF, 0x07, 0xFF, 0x0F, 0xAA,
+                                    0xAA, 0x23, 0x01, 0x56, 0x04, 0x89, 0x07};
   const ImageLayout layout_ = *v4l2_layout(kV4l2Y12, 3, 2, 8);
   FrameIdUnwrapper ids_{32, false};
   CameraStats stats_;
   CameraFrame frame_;
   V4l2BufferInfo info(uint32_t sequence) const {
-    return {sequence, false, true, 5'000'000 + sequence * 33'333, static_cast<uint32_t>(bytes_.size())};
+    return {sequence, false, true, 5'000'000 + sequence * 33'333,
+            static_cast<uint32_t>(bytes_.size())};
   }
 };
 
 TEST_F(V4l2Buffers, ConvertsPixelsSequenceAndMonotonicTimestamp) {
-  ASSERT_TRUE(v4l2_buffer_to_frame(bytes_, info(0), layout_, HostTime{7, 8}, ids_, stats_, frame_).ok());
+  ASSERT_TRUE(
+      v4l2_buffer_to_frame(bytes_, info(0), layout_, HostTime{7, 8}, ids_, stats_, frame_).ok());
   ASSERT_EQ(frame_.image.type(), CV_16UC1);
   EXPECT_EQ(frame_.image.at<uint16_t>(0, 1), 0x7FF);
   EXPECT_EQ(frame_.image.at<uint16_t>(1, 2), 0x789);

@@ -36,12 +36,17 @@ bool is_known_device(const std::string& id) {
 
 IoStatus GigeOptions::validate() const {
   const std::string dev = camera_id.empty() ? "gige" : camera_id;
-  auto bad = [&](const std::string& what) { return IoStatus::Error(IoCode::kInvalidArgument, dev, what); };
-  if (!(exposure_us > 0.0) || exposure_us > 1e8) return bad("options.exposure_us must be in (0, 1e8]");
+  auto bad = [&](const std::string& what) {
+    return IoStatus::Error(IoCode::kInvalidArgument, dev, what);
+  };
+  if (!(exposure_us > 0.0) || exposure_us > 1e8)
+    return bad("options.exposure_us must be in (0, 1e8]");
   if (gain && !(*gain >= 0.0 && *gain < 1e6)) return bad("options.gain must be finite and >= 0");
-  if (!(frame_rate_hz >= 0.0 && frame_rate_hz < 1e6)) return bad("options.frame_rate_hz must be >= 0");
+  if (!(frame_rate_hz >= 0.0 && frame_rate_hz < 1e6))
+    return bad("options.frame_rate_hz must be >= 0");
   if (buffer_count < 2 || buffer_count > 256) return bad("options.buffer_count must be in 2..256");
-  if (frame_id_bits != 16 && frame_id_bits != 64) return bad("options.frame_id_bits must be 16 or 64");
+  if (frame_id_bits != 16 && frame_id_bits != 64)
+    return bad("options.frame_id_bits must be 16 or 64");
   if (trigger_mode == TriggerMode::kHardware && trigger_source.empty()) {
     return bad("options.trigger_source is empty for hardware trigger");
   }
@@ -70,8 +75,10 @@ IoStatus GigeCamera::open() {
     // it answered on; a stale or empty list can bind the stream to the wrong local address.
     arv_update_device_list();
   }
-  camera_ = arv_camera_new(options_.camera_id.empty() ? nullptr : options_.camera_id.c_str(), &error);
-  if (camera_ == nullptr) return take_error(error, name_, "camera not found", IoCode::kDisconnected);
+  camera_ =
+      arv_camera_new(options_.camera_id.empty() ? nullptr : options_.camera_id.c_str(), &error);
+  if (camera_ == nullptr)
+    return take_error(error, name_, "camera not found", IoCode::kDisconnected);
   control_lost_.store(false);
   control_lost_handler_ = g_signal_connect(arv_camera_get_device(camera_), "control-lost",
                                            G_CALLBACK(&GigeCamera::on_control_lost), this);
@@ -84,10 +91,12 @@ IoStatus GigeCamera::configure() {
   GError* error = nullptr;
   const uint32_t want = pfnc_code(options_.pixel_format);
   arv_camera_set_pixel_format(camera_, want, &error);
-  IoStatus s = take_error(error, name_, std::string("pixel format ") + genicam_name(options_.pixel_format));
+  IoStatus s =
+      take_error(error, name_, std::string("pixel format ") + genicam_name(options_.pixel_format));
   if (s.ok() && arv_camera_get_pixel_format(camera_, nullptr) != want) {
-    s = IoStatus::Error(IoCode::kUnsupported, name_,
-                        std::string("camera did not accept ") + genicam_name(options_.pixel_format));
+    s = IoStatus::Error(
+        IoCode::kUnsupported, name_,
+        std::string("camera did not accept ") + genicam_name(options_.pixel_format));
   }
   if (!s.ok()) return s;
   arv_camera_set_acquisition_mode(camera_, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
@@ -105,8 +114,12 @@ IoStatus GigeCamera::configure() {
         arv_camera_set_frame_rate(camera_, options_.frame_rate_hz, &error);
       }
       break;
-    case TriggerMode::kSoftware: arv_camera_set_trigger(camera_, "Software", &error); break;
-    case TriggerMode::kHardware: arv_camera_set_trigger(camera_, options_.trigger_source.c_str(), &error); break;
+    case TriggerMode::kSoftware:
+      arv_camera_set_trigger(camera_, "Software", &error);
+      break;
+    case TriggerMode::kHardware:
+      arv_camera_set_trigger(camera_, options_.trigger_source.c_str(), &error);
+      break;
   }
   if (s = take_error(error, name_, "trigger / frame rate"); !s.ok()) return s;
   if (arv_camera_is_gv_device(camera_)) {
@@ -125,22 +138,26 @@ IoStatus GigeCamera::configure() {
 void GigeCamera::close() {
   stop();
   if (camera_ != nullptr) {
-    if (control_lost_handler_ != 0) g_signal_handler_disconnect(arv_camera_get_device(camera_), control_lost_handler_);
+    if (control_lost_handler_ != 0)
+      g_signal_handler_disconnect(arv_camera_get_device(camera_), control_lost_handler_);
     control_lost_handler_ = 0;
     g_clear_object(&camera_);
   }
 }
 
 IoStatus GigeCamera::start() {
-  if (camera_ == nullptr) return IoStatus::Error(IoCode::kDisconnected, name_, "start: camera not open");
+  if (camera_ == nullptr)
+    return IoStatus::Error(IoCode::kDisconnected, name_, "start: camera not open");
   if (streaming_) return IoStatus::Ok();
   GError* error = nullptr;
   const guint payload = arv_camera_get_payload(camera_, &error);
-  if (IoStatus s = take_error(error, name_, "payload size", IoCode::kSystemError); !s.ok()) return s;
+  if (IoStatus s = take_error(error, name_, "payload size", IoCode::kSystemError); !s.ok())
+    return s;
   stream_ = arv_camera_create_stream(camera_, nullptr, nullptr, &error);  // no callback: see header
   if (stream_ == nullptr) return take_error(error, name_, "create stream", IoCode::kSystemError);
   payload_bytes_ = payload;
-  for (int i = 0; i < options_.buffer_count; ++i) arv_stream_push_buffer(stream_, arv_buffer_new(payload, nullptr));
+  for (int i = 0; i < options_.buffer_count; ++i)
+    arv_stream_push_buffer(stream_, arv_buffer_new(payload, nullptr));
   arv_camera_start_acquisition(camera_, &error);
   if (IoStatus s = take_error(error, name_, "start acquisition", IoCode::kSystemError); !s.ok()) {
     g_clear_object(&stream_);
@@ -166,9 +183,11 @@ void GigeCamera::stop() {
 }
 
 IoStatus GigeCamera::trigger() {
-  if (camera_ == nullptr) return IoStatus::Error(IoCode::kDisconnected, name_, "trigger: camera not open");
+  if (camera_ == nullptr)
+    return IoStatus::Error(IoCode::kDisconnected, name_, "trigger: camera not open");
   if (options_.trigger_mode != TriggerMode::kSoftware) {
-    return IoStatus::Error(IoCode::kInvalidArgument, name_, "trigger: camera is not in software trigger mode");
+    return IoStatus::Error(IoCode::kInvalidArgument, name_,
+                           "trigger: camera is not in software trigger mode");
   }
   GError* error = nullptr;
   arv_camera_software_trigger(camera_, &error);
@@ -186,13 +205,18 @@ CameraStats GigeCamera::stats() const {
 }
 
 IoStatus GigeCamera::grab(CameraFrame& frame, std::chrono::milliseconds timeout) {
-  if (!streaming_) return IoStatus::Error(IoCode::kInvalidArgument, name_, "grab: not streaming (call start)");
+  if (!streaming_)
+    return IoStatus::Error(IoCode::kInvalidArgument, name_, "grab: not streaming (call start)");
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   for (;;) {
-    if (control_lost_.load()) return IoStatus::Error(IoCode::kDisconnected, name_, "control lost (heartbeat)");
-    const auto left = std::chrono::duration_cast<std::chrono::microseconds>(deadline - std::chrono::steady_clock::now());
-    ArvBuffer* buffer = arv_stream_timeout_pop_buffer(stream_, static_cast<guint64>(std::max<int64_t>(0, left.count())));
-    if (buffer == nullptr) return IoStatus::Error(IoCode::kTimeout, name_, "grab: no frame within timeout");
+    if (control_lost_.load())
+      return IoStatus::Error(IoCode::kDisconnected, name_, "control lost (heartbeat)");
+    const auto left = std::chrono::duration_cast<std::chrono::microseconds>(
+        deadline - std::chrono::steady_clock::now());
+    ArvBuffer* buffer = arv_stream_timeout_pop_buffer(
+        stream_, static_cast<guint64>(std::max<int64_t>(0, left.count())));
+    if (buffer == nullptr)
+      return IoStatus::Error(IoCode::kTimeout, name_, "grab: no frame within timeout");
     const HostTime received = host_time_now();
     IoStatus s = IoStatus::Ok();
     if (arv_buffer_get_status(buffer) != ARV_BUFFER_STATUS_SUCCESS) {
@@ -207,17 +231,19 @@ IoStatus GigeCamera::grab(CameraFrame& frame, std::chrono::milliseconds timeout)
   }
 }
 
-IoStatus GigeCamera::unpack_buffer(_ArvBuffer* buffer, CameraFrame& frame, const HostTime& received) {
+IoStatus GigeCamera::unpack_buffer(_ArvBuffer* buffer, CameraFrame& frame,
+                                   const HostTime& received) {
   const auto format = pixel_format_from_pfnc(arv_buffer_get_image_pixel_format(buffer));
   const ArvBufferPayloadType type = arv_buffer_get_payload_type(buffer);
-  if (!format || (type != ARV_BUFFER_PAYLOAD_TYPE_IMAGE && type != ARV_BUFFER_PAYLOAD_TYPE_EXTENDED_CHUNK_DATA)) {
+  if (!format || (type != ARV_BUFFER_PAYLOAD_TYPE_IMAGE &&
+                  type != ARV_BUFFER_PAYLOAD_TYPE_EXTENDED_CHUNK_DATA)) {
     ++stats_.unpack_errors;
     return IoStatus::Error(IoCode::kInvalidArgument, name_, "buffer is not a Mono image");
   }
   gint x_padding = 0, y_padding = 0;
   arv_buffer_get_image_padding(buffer, &x_padding, &y_padding);
-  const ImageLayout layout{arv_buffer_get_image_width(buffer), arv_buffer_get_image_height(buffer), *format,
-                           static_cast<std::size_t>(std::max(0, x_padding))};
+  const ImageLayout layout{arv_buffer_get_image_width(buffer), arv_buffer_get_image_height(buffer),
+                           *format, static_cast<std::size_t>(std::max(0, x_padding))};
   size_t size = 0;
   const auto* data = static_cast<const uint8_t*>(arv_buffer_get_image_data(buffer, &size));
   if (data != nullptr && size == 0) {
@@ -243,9 +269,12 @@ IoStatus GigeCamera::unpack_buffer(_ArvBuffer* buffer, CameraFrame& frame, const
   const guint64 device_ns = arv_buffer_get_timestamp(buffer);
   const guint64 system_ns = arv_buffer_get_system_timestamp(buffer);
   frame.time.host = received;
-  frame.time.sensor_time_us = device_ns != 0 ? std::optional<int64_t>(static_cast<int64_t>(device_ns / 1000)) : std::nullopt;
-  frame.arrival_realtime_us =
-      system_ns != 0 ? std::optional<int64_t>(static_cast<int64_t>(system_ns / 1000)) : std::nullopt;
+  frame.time.sensor_time_us = device_ns != 0
+                                  ? std::optional<int64_t>(static_cast<int64_t>(device_ns / 1000))
+                                  : std::nullopt;
+  frame.arrival_realtime_us = system_ns != 0
+                                  ? std::optional<int64_t>(static_cast<int64_t>(system_ns / 1000))
+                                  : std::nullopt;
   ++stats_.frames;
   return IoStatus::Ok();
 }

@@ -3,7 +3,6 @@
 // converted to IoStatus here and never escape.
 
 #include <gpiod.hpp>
-
 #include <system_error>
 
 #include "nav/drivers/transports/gpio_lines.h"
@@ -20,23 +19,30 @@ struct GpiodLines::Impl {
 
 namespace {
 
-IoStatus from_system_error(const std::system_error& e, const std::string& device, const std::string& what) {
+IoStatus from_system_error(const std::system_error& e, const std::string& device,
+                           const std::string& what) {
   return IoStatus::FromErrno(e.code().value(), device, what);
 }
 
 }  // namespace
 
 IoStatus GpioOptions::validate() const {
-  auto bad = [&](const std::string& what) { return IoStatus::Error(IoCode::kInvalidArgument, chip.empty() ? "gpio" : chip, what); };
+  auto bad = [&](const std::string& what) {
+    return IoStatus::Error(IoCode::kInvalidArgument, chip.empty() ? "gpio" : chip, what);
+  };
   if (chip.empty()) return bad("options.chip is empty");
-  if (trigger_line < -1 || strobe_line < -1) return bad("options line offsets must be >= 0 (or -1 for none)");
-  if (trigger_line < 0 && strobe_line < 0) return bad("options: neither trigger_line nor strobe_line is set");
-  if (trigger_line >= 0 && trigger_line == strobe_line) return bad("options: trigger_line equals strobe_line");
+  if (trigger_line < -1 || strobe_line < -1)
+    return bad("options line offsets must be >= 0 (or -1 for none)");
+  if (trigger_line < 0 && strobe_line < 0)
+    return bad("options: neither trigger_line nor strobe_line is set");
+  if (trigger_line >= 0 && trigger_line == strobe_line)
+    return bad("options: trigger_line equals strobe_line");
   if (consumer.empty()) return bad("options.consumer is empty");
   return IoStatus::Ok();
 }
 
-GpiodLines::GpiodLines(GpioOptions options) : options_(std::move(options)), options_status_(options_.validate()) {}
+GpiodLines::GpiodLines(GpioOptions options)
+    : options_(std::move(options)), options_status_(options_.validate()) {}
 
 GpiodLines::~GpiodLines() { close(); }
 
@@ -50,16 +56,18 @@ IoStatus GpiodLines::open() {
     if (options_.trigger_line >= 0) {
       step = "request trigger line " + std::to_string(options_.trigger_line);
       impl->trigger = impl->chip.get_line(static_cast<unsigned>(options_.trigger_line));
-      impl->trigger.request({options_.consumer, gpiod::line_request::DIRECTION_OUTPUT,
-                             options_.trigger_active_low ? gpiod::line_request::FLAG_ACTIVE_LOW : std::bitset<32>{}},
-                            0);  // start inactive: never fire the camera by opening
+      impl->trigger.request(
+          {options_.consumer, gpiod::line_request::DIRECTION_OUTPUT,
+           options_.trigger_active_low ? gpiod::line_request::FLAG_ACTIVE_LOW : std::bitset<32>{}},
+          0);  // start inactive: never fire the camera by opening
       impl->has_trigger = true;
     }
     if (options_.strobe_line >= 0) {
       step = "request strobe line " + std::to_string(options_.strobe_line);
       impl->strobe = impl->chip.get_line(static_cast<unsigned>(options_.strobe_line));
-      impl->strobe.request({options_.consumer, gpiod::line_request::EVENT_BOTH_EDGES,
-                            options_.strobe_active_low ? gpiod::line_request::FLAG_ACTIVE_LOW : std::bitset<32>{}});
+      impl->strobe.request(
+          {options_.consumer, gpiod::line_request::EVENT_BOTH_EDGES,
+           options_.strobe_active_low ? gpiod::line_request::FLAG_ACTIVE_LOW : std::bitset<32>{}});
       impl->has_strobe = true;
     }
   } catch (const std::system_error& e) {
@@ -97,7 +105,8 @@ IoStatus GpiodLines::set(bool active) {
 
 IoStatus GpiodLines::wait_edge(EdgeEvent& event, std::chrono::milliseconds timeout) {
   if (!impl_ || !impl_->has_strobe) {
-    return IoStatus::Error(IoCode::kInvalidArgument, options_.chip, "wait_edge: no strobe line open");
+    return IoStatus::Error(IoCode::kInvalidArgument, options_.chip,
+                           "wait_edge: no strobe line open");
   }
   try {
     if (!impl_->strobe.event_wait(timeout)) {
@@ -106,7 +115,8 @@ IoStatus GpiodLines::wait_edge(EdgeEvent& event, std::chrono::milliseconds timeo
     const gpiod::line_event e = impl_->strobe.event_read();
     event.received = host_time_now();
     event.rising = e.event_type == gpiod::line_event::RISING_EDGE;
-    event.kernel_time_us = std::chrono::duration_cast<std::chrono::microseconds>(e.timestamp).count();
+    event.kernel_time_us =
+        std::chrono::duration_cast<std::chrono::microseconds>(e.timestamp).count();
   } catch (const std::system_error& e) {
     return from_system_error(e, options_.chip, "read strobe event");
   }

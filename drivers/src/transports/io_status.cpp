@@ -9,13 +9,20 @@ namespace nav::drivers {
 
 const char* to_string(IoCode code) {
   switch (code) {
-    case IoCode::kOk: return "ok";
-    case IoCode::kTimeout: return "timeout";
-    case IoCode::kDisconnected: return "disconnected";
-    case IoCode::kInvalidArgument: return "invalid argument";
-    case IoCode::kBusy: return "busy";
-    case IoCode::kUnsupported: return "unsupported";
-    case IoCode::kSystemError: return "system error";
+    case IoCode::kOk:
+      return "ok";
+    case IoCode::kTimeout:
+      return "timeout";
+    case IoCode::kDisconnected:
+      return "disconnected";
+    case IoCode::kInvalidArgument:
+      return "invalid argument";
+    case IoCode::kBusy:
+      return "busy";
+    case IoCode::kUnsupported:
+      return "unsupported";
+    case IoCode::kSystemError:
+      return "system error";
   }
   return "unknown";
 }

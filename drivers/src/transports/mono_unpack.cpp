@@ -5,9 +5,8 @@
 
 #include <array>
 #include <cstring>
-#include <string>
-
 #include <opencv2/core.hpp>
+#include <string>
 
 namespace nav::drivers {
 namespace {
@@ -29,7 +28,9 @@ constexpr std::array<FormatInfo, 5> kFormats{{
 
 const FormatInfo& info(PixelFormat f) { return kFormats[static_cast<std::size_t>(f)]; }
 
-bool is_packed(PixelFormat f) { return f == PixelFormat::kMono12Packed || f == PixelFormat::kMono12p; }
+bool is_packed(PixelFormat f) {
+  return f == PixelFormat::kMono12Packed || f == PixelFormat::kMono12p;
+}
 
 /// Bytes that `n` consecutive pixels occupy starting at a byte boundary.
 std::size_t bytes_for_pixels(std::size_t n, PixelFormat f) {
@@ -100,7 +101,9 @@ std::optional<PixelFormat> pixel_format_from_name(const char* name) {
 
 int significant_bits(PixelFormat format) { return info(format).bits; }
 
-int unpacked_cv_type(PixelFormat format) { return format == PixelFormat::kMono8 ? CV_8UC1 : CV_16UC1; }
+int unpacked_cv_type(PixelFormat format) {
+  return format == PixelFormat::kMono8 ? CV_8UC1 : CV_16UC1;
+}
 
 std::size_t image_bytes(const ImageLayout& l) {
   if (l.width <= 0 || l.height <= 0) return 0;
@@ -108,20 +111,21 @@ std::size_t image_bytes(const ImageLayout& l) {
   const auto h = static_cast<std::size_t>(l.height);
   if (l.line_padding_bytes == 0) return bytes_for_pixels(w * h, l.format);
   // The last line's padding is not required (some senders trim it).
-  return (h - 1) * (bytes_for_pixels(w, l.format) + l.line_padding_bytes) + bytes_for_pixels(w, l.format);
+  return (h - 1) * (bytes_for_pixels(w, l.format) + l.line_padding_bytes) +
+         bytes_for_pixels(w, l.format);
 }
 
 IoStatus unpack_mono(std::span<const uint8_t> data, const ImageLayout& l, cv::Mat& out) {
   const std::size_t needed = image_bytes(l);
   if (needed == 0) {
-    return IoStatus::Error(IoCode::kInvalidArgument, "image",
-                           "layout " + std::to_string(l.width) + "x" + std::to_string(l.height) +
-                               " is not positive");
+    return IoStatus::Error(
+        IoCode::kInvalidArgument, "image",
+        "layout " + std::to_string(l.width) + "x" + std::to_string(l.height) + " is not positive");
   }
   if (data.size() < needed) {
     return IoStatus::Error(IoCode::kInvalidArgument, "image",
-                           std::string(genicam_name(l.format)) + " " + std::to_string(l.width) + "x" +
-                               std::to_string(l.height) + " needs " + std::to_string(needed) +
+                           std::string(genicam_name(l.format)) + " " + std::to_string(l.width) +
+                               "x" + std::to_string(l.height) + " needs " + std::to_string(needed) +
                                " bytes, buffer has " + std::to_string(data.size()));
   }
   out.create(l.height, l.width, unpacked_cv_type(l.format));
@@ -147,8 +151,8 @@ IoStatus unpack_mono(std::span<const uint8_t> data, const ImageLayout& l, cv::Ma
 }
 
 std::vector<uint8_t> pack_mono(const cv::Mat& image, const ImageLayout& l) {
-  if (image.rows != l.height || image.cols != l.width || image.type() != unpacked_cv_type(l.format) ||
-      image_bytes(l) == 0) {
+  if (image.rows != l.height || image.cols != l.width ||
+      image.type() != unpacked_cv_type(l.format) || image_bytes(l) == 0) {
     return {};
   }
   const std::size_t padded_total =

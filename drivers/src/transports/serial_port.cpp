@@ -69,16 +69,19 @@ IoStatus SerialPort::configure() {
     return IoStatus::FromErrno(errno, options_.device, "tcgetattr (not a tty?)");
   }
   apply_serial_options(options_, tio);
-  if (::tcsetattr(fd_, TCSANOW, &tio) != 0) return IoStatus::FromErrno(errno, options_.device, "tcsetattr");
+  if (::tcsetattr(fd_, TCSANOW, &tio) != 0)
+    return IoStatus::FromErrno(errno, options_.device, "tcsetattr");
   // tcsetattr succeeds if ANY change was applied: read back to catch a refused rate or framing.
   termios check{};
-  if (::tcgetattr(fd_, &check) != 0) return IoStatus::FromErrno(errno, options_.device, "tcgetattr");
+  if (::tcgetattr(fd_, &check) != 0)
+    return IoStatus::FromErrno(errno, options_.device, "tcgetattr");
   constexpr tcflag_t kFraming = CSIZE | PARENB | PARODD;
-  if (cfgetospeed(&check) != cfgetospeed(&tio) || (check.c_cflag & kFraming) != (tio.c_cflag & kFraming)) {
+  if (cfgetospeed(&check) != cfgetospeed(&tio) ||
+      (check.c_cflag & kFraming) != (tio.c_cflag & kFraming)) {
     // e.g. a pseudo-terminal forces CS8 without parity (Linux pty_set_termios).
-    return IoStatus::Error(IoCode::kUnsupported, options_.device,
-                           "device refused baud " + std::to_string(options_.baud) +
-                               ", data bits or parity");
+    return IoStatus::Error(
+        IoCode::kUnsupported, options_.device,
+        "device refused baud " + std::to_string(options_.baud) + ", data bits or parity");
   }
   ::tcflush(fd_, TCIOFLUSH);  // drop bytes queued before we owned the line
   return IoStatus::Ok();
@@ -133,7 +136,9 @@ ReadResult SerialPort::read(std::span<uint8_t> buffer, std::chrono::milliseconds
     if (ready < 0 && errno == EINTR) continue;
     if (ready < 0) return {IoStatus::FromErrno(errno, options_.device, "poll"), 0, {}};
     if (ready == 0) {
-      return {IoStatus::Error(IoCode::kTimeout, options_.device, "read: no data within timeout"), 0, {}};
+      return {IoStatus::Error(IoCode::kTimeout, options_.device, "read: no data within timeout"),
+              0,
+              {}};
     }
     const ssize_t n = ::read(fd_, buffer.data(), buffer.size());
     const HostTime received = host_time_now();
@@ -144,9 +149,12 @@ ReadResult SerialPort::read(std::span<uint8_t> buffer, std::chrono::milliseconds
     if (n < 0 && (errno == EAGAIN || errno == EINTR)) continue;
     // read() == 0 after POLLIN, POLLHUP, or EIO/ENXIO: the device is gone.
     const int err = n < 0 ? errno : EIO;
-    if (n < 0 && !is_vanish_errno(err)) return {IoStatus::FromErrno(err, options_.device, "read"), 0, {}};
+    if (n < 0 && !is_vanish_errno(err))
+      return {IoStatus::FromErrno(err, options_.device, "read"), 0, {}};
     return {handle_disconnect(IoStatus::Error(IoCode::kDisconnected, options_.device,
-                                              "device vanished (read)", err)), 0, {}};
+                                              "device vanished (read)", err)),
+            0,
+            {}};
   }
 }
 

@@ -45,19 +45,21 @@ can_filter to_kernel(const CanFilter& f) {
 
 bool can_filter_accepts(const CanFilter& filter, uint32_t id, bool extended) {
   const can_filter k = to_kernel(filter);
-  const canid_t raw = (id & (extended ? CAN_EFF_MASK : CAN_SFF_MASK)) | (extended ? CAN_EFF_FLAG : 0u);
+  const canid_t raw =
+      (id & (extended ? CAN_EFF_MASK : CAN_SFF_MASK)) | (extended ? CAN_EFF_FLAG : 0u);
   return (raw & k.can_mask) == (k.can_id & k.can_mask);
 }
 
 IoStatus validate_can_frame(const CanFrame& f) {
   const uint32_t max_id = f.extended ? CAN_EFF_MASK : CAN_SFF_MASK;
   if (f.id > max_id) {
-    return IoStatus::Error(IoCode::kInvalidArgument, "can",
-                           "frame id " + std::to_string(f.id) + " exceeds " +
-                               (f.extended ? "29" : "11") + " bits");
+    return IoStatus::Error(
+        IoCode::kInvalidArgument, "can",
+        "frame id " + std::to_string(f.id) + " exceeds " + (f.extended ? "29" : "11") + " bits");
   }
   if (f.dlc > CAN_MAX_DLEN) {
-    return IoStatus::Error(IoCode::kInvalidArgument, "can", "frame dlc " + std::to_string(f.dlc) + " > 8");
+    return IoStatus::Error(IoCode::kInvalidArgument, "can",
+                           "frame dlc " + std::to_string(f.dlc) + " > 8");
   }
   return IoStatus::Ok();
 }
@@ -148,7 +150,8 @@ IoStatus SocketCanBus::receive(CanFrame& frame, std::chrono::milliseconds timeou
     const int ready = ::poll(&pfd, 1, remaining_ms(deadline));
     if (ready < 0 && errno == EINTR) continue;
     if (ready < 0) return IoStatus::FromErrno(errno, name_, "poll");
-    if (ready == 0) return IoStatus::Error(IoCode::kTimeout, name_, "receive: no frame within timeout");
+    if (ready == 0)
+      return IoStatus::Error(IoCode::kTimeout, name_, "receive: no frame within timeout");
     bool accepted = false;
     IoStatus s = receive_one(frame, accepted);
     if (!s.ok() || accepted) return s;
@@ -205,9 +208,10 @@ IoStatus SocketCanBus::receive_one(CanFrame& frame, bool& accepted) {
   }
   const bool extended = (k.can_id & CAN_EFF_FLAG) != 0;
   const uint32_t id = k.can_id & (extended ? CAN_EFF_MASK : CAN_SFF_MASK);
-  const bool pass = filters_.empty() || std::any_of(filters_.begin(), filters_.end(), [&](const CanFilter& f) {
-                      return can_filter_accepts(f, id, extended);
-                    });
+  const bool pass =
+      filters_.empty() || std::any_of(filters_.begin(), filters_.end(), [&](const CanFilter& f) {
+        return can_filter_accepts(f, id, extended);
+      });
   if (!pass) {
     ++stats_.filtered_out;
     return IoStatus::Ok();
@@ -241,7 +245,8 @@ IoStatus SocketCanBus::send(const CanFrame& frame, std::chrono::milliseconds tim
     if (n < 0 && errno != EAGAIN && errno != ENOBUFS && errno != EINTR) {
       return IoStatus::FromErrno(errno, name_, "send");
     }
-    if (Clock::now() >= deadline) return IoStatus::Error(IoCode::kTimeout, name_, "send: TX queue full");
+    if (Clock::now() >= deadline)
+      return IoStatus::Error(IoCode::kTimeout, name_, "send: TX queue full");
     pollfd pfd{fd_, POLLOUT, 0};
     (void)::poll(&pfd, 1, std::min(remaining_ms(deadline), 5));
   }

@@ -8,7 +8,8 @@
 namespace nav::drivers {
 
 IoStatus TriggerOutput::pulse(std::chrono::microseconds width) {
-  if (width.count() <= 0) return IoStatus::Error(IoCode::kInvalidArgument, "gpio", "pulse width must be > 0");
+  if (width.count() <= 0)
+    return IoStatus::Error(IoCode::kInvalidArgument, "gpio", "pulse width must be > 0");
   if (IoStatus s = set(true); !s.ok()) return s;
   std::this_thread::sleep_for(width);
   return set(false);

@@ -26,7 +26,8 @@ int xioctl(int fd, unsigned long request, void* arg) {
 
 }  // namespace
 
-V4l2Camera::V4l2Camera(V4l2Options options) : options_(std::move(options)), options_status_(options_.validate()) {}
+V4l2Camera::V4l2Camera(V4l2Options options)
+    : options_(std::move(options)), options_status_(options_.validate()) {}
 
 V4l2Camera::~V4l2Camera() { close(); }
 
@@ -45,12 +46,15 @@ IoStatus V4l2Camera::open() {
   if (xioctl(fd_, VIDIOC_QUERYCAP, &cap) != 0) {
     const int err = errno;
     close();
-    return IoStatus::Error(IoCode::kUnsupported, options_.device, "VIDIOC_QUERYCAP: not a V4L2 device", err);
+    return IoStatus::Error(IoCode::kUnsupported, options_.device,
+                           "VIDIOC_QUERYCAP: not a V4L2 device", err);
   }
-  const uint32_t caps = (cap.capabilities & V4L2_CAP_DEVICE_CAPS) != 0 ? cap.device_caps : cap.capabilities;
+  const uint32_t caps =
+      (cap.capabilities & V4L2_CAP_DEVICE_CAPS) != 0 ? cap.device_caps : cap.capabilities;
   if ((caps & V4L2_CAP_VIDEO_CAPTURE) == 0 || (caps & V4L2_CAP_STREAMING) == 0) {
     close();
-    return IoStatus::Error(IoCode::kUnsupported, options_.device, "not a streaming video capture device");
+    return IoStatus::Error(IoCode::kUnsupported, options_.device,
+                           "not a streaming video capture device");
   }
   IoStatus s = negotiate_format();
   if (s.ok()) s = map_buffers();
@@ -61,13 +65,14 @@ IoStatus V4l2Camera::negotiate_format() {
   std::vector<uint32_t> offered;
   v4l2_fmtdesc desc{};
   desc.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  for (desc.index = 0; xioctl(fd_, VIDIOC_ENUM_FMT, &desc) == 0; ++desc.index) offered.push_back(desc.pixelformat);
+  for (desc.index = 0; xioctl(fd_, VIDIOC_ENUM_FMT, &desc) == 0; ++desc.index)
+    offered.push_back(desc.pixelformat);
   const auto chosen = choose_v4l2_format(offered, options_.formats);
   if (!chosen) {
     close();
     return IoStatus::Error(IoCode::kUnsupported, options_.device,
-                           "offers none of the requested grey formats (" + std::to_string(offered.size()) +
-                               " formats offered)");
+                           "offers none of the requested grey formats (" +
+                               std::to_string(offered.size()) + " formats offered)");
   }
   v4l2_format fmt{};
   fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -81,7 +86,8 @@ IoStatus V4l2Camera::negotiate_format() {
                                   static_cast<int>(fmt.fmt.pix.height), fmt.fmt.pix.bytesperline);
   if (!layout) {
     close();
-    return IoStatus::Error(IoCode::kUnsupported, options_.device, "driver changed the format to one we cannot read");
+    return IoStatus::Error(IoCode::kUnsupported, options_.device,
+                           "driver changed the format to one we cannot read");
   }
   fourcc_ = fmt.fmt.pix.pixelformat;
   layout_ = *layout;
@@ -96,7 +102,8 @@ IoStatus V4l2Camera::map_buffers() {
   if (xioctl(fd_, VIDIOC_REQBUFS, &req) != 0) return fail(errno, "VIDIOC_REQBUFS");
   if (req.count < 2) {
     close();
-    return IoStatus::Error(IoCode::kUnsupported, options_.device, "driver granted fewer than 2 buffers");
+    return IoStatus::Error(IoCode::kUnsupported, options_.device,
+                           "driver granted fewer than 2 buffers");
   }
   for (uint32_t i = 0; i < req.count; ++i) {
     v4l2_buffer buf{};
@@ -104,7 +111,8 @@ IoStatus V4l2Camera::map_buffers() {
     buf.memory = V4L2_MEMORY_MMAP;
     buf.index = i;
     if (xioctl(fd_, VIDIOC_QUERYBUF, &buf) != 0) return fail(errno, "VIDIOC_QUERYBUF");
-    void* start = ::mmap(nullptr, buf.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, buf.m.offset);
+    void* start =
+        ::mmap(nullptr, buf.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, buf.m.offset);
     if (start == MAP_FAILED) return fail(errno, "mmap");
     buffers_.push_back({start, buf.length});
   }
@@ -120,17 +128,20 @@ void V4l2Camera::close() {
 }
 
 IoStatus V4l2Camera::start() {
-  if (fd_ < 0) return IoStatus::Error(IoCode::kDisconnected, options_.device, "start: device not open");
+  if (fd_ < 0)
+    return IoStatus::Error(IoCode::kDisconnected, options_.device, "start: device not open");
   if (streaming_) return IoStatus::Ok();
   for (uint32_t i = 0; i < buffers_.size(); ++i) {
     v4l2_buffer buf{};
     buf.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     buf.memory = V4L2_MEMORY_MMAP;
     buf.index = i;
-    if (xioctl(fd_, VIDIOC_QBUF, &buf) != 0) return IoStatus::FromErrno(errno, options_.device, "VIDIOC_QBUF");
+    if (xioctl(fd_, VIDIOC_QBUF, &buf) != 0)
+      return IoStatus::FromErrno(errno, options_.device, "VIDIOC_QBUF");
   }
   v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  if (xioctl(fd_, VIDIOC_STREAMON, &type) != 0) return IoStatus::FromErrno(errno, options_.device, "VIDIOC_STREAMON");
+  if (xioctl(fd_, VIDIOC_STREAMON, &type) != 0)
+    return IoStatus::FromErrno(errno, options_.device, "VIDIOC_STREAMON");
   ids_.reset();
   streaming_ = true;
   return IoStatus::Ok();
@@ -148,15 +159,18 @@ IoStatus V4l2Camera::trigger() {
 }
 
 IoStatus V4l2Camera::grab(CameraFrame& frame, std::chrono::milliseconds timeout) {
-  if (!streaming_) return IoStatus::Error(IoCode::kInvalidArgument, options_.device, "grab: not streaming");
+  if (!streaming_)
+    return IoStatus::Error(IoCode::kInvalidArgument, options_.device, "grab: not streaming");
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   for (;;) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
     pollfd pfd{fd_, POLLIN, 0};
     const int ready = ::poll(&pfd, 1, static_cast<int>(std::max<int64_t>(0, left.count())));
     if (ready < 0 && errno == EINTR) continue;
     if (ready < 0) return IoStatus::FromErrno(errno, options_.device, "poll");
-    if (ready == 0) return IoStatus::Error(IoCode::kTimeout, options_.device, "grab: no frame within timeout");
+    if (ready == 0)
+      return IoStatus::Error(IoCode::kTimeout, options_.device, "grab: no frame within timeout");
     if ((pfd.revents & POLLERR) != 0) {
       return IoStatus::Error(IoCode::kDisconnected, options_.device, "device error (unplugged?)");
     }
@@ -168,17 +182,20 @@ IoStatus V4l2Camera::grab(CameraFrame& frame, std::chrono::milliseconds timeout)
       return IoStatus::FromErrno(errno, options_.device, "VIDIOC_DQBUF");  // ENODEV: unplugged
     }
     const HostTime received = host_time_now();
-    const V4l2BufferInfo info{buf.sequence, (buf.flags & V4L2_BUF_FLAG_ERROR) != 0,
-                              (buf.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC,
-                              static_cast<int64_t>(buf.timestamp.tv_sec) * 1'000'000 + buf.timestamp.tv_usec,
-                              buf.bytesused};
-    IoStatus s = IoStatus::Error(IoCode::kInvalidArgument, options_.device, "buffer index out of range");
+    const V4l2BufferInfo info{
+        buf.sequence, (buf.flags & V4L2_BUF_FLAG_ERROR) != 0,
+        (buf.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC,
+        static_cast<int64_t>(buf.timestamp.tv_sec) * 1'000'000 + buf.timestamp.tv_usec,
+        buf.bytesused};
+    IoStatus s =
+        IoStatus::Error(IoCode::kInvalidArgument, options_.device, "buffer index out of range");
     if (buf.index < buffers_.size()) {
       const Mapping& m = buffers_[buf.index];
-      s = v4l2_buffer_to_frame({static_cast<const uint8_t*>(m.start), m.length}, info, layout_, received, ids_, stats_,
-                               frame);
+      s = v4l2_buffer_to_frame({static_cast<const uint8_t*>(m.start), m.length}, info, layout_,
+                               received, ids_, stats_, frame);
     }
-    if (xioctl(fd_, VIDIOC_QBUF, &buf) != 0) return IoStatus::FromErrno(errno, options_.device, "VIDIOC_QBUF");
+    if (xioctl(fd_, VIDIOC_QBUF, &buf) != 0)
+      return IoStatus::FromErrno(errno, options_.device, "VIDIOC_QBUF");
     if (s.ok()) return s;
     // Erroneous or short buffers are counted and skipped: wait for the next one.
   }

@@ -5,15 +5,14 @@
 
 #include <arv.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <sys/file.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstring>
-#include <vector>
-
-#include <gtest/gtest.h>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "nav/drivers/transports/gige_camera.h"
 #include "nav/drivers/transports/mono_unpack.h"
@@ -24,9 +23,9 @@ using nav::drivers::CameraFrame;
 using nav::drivers::GigeCamera;
 using nav::drivers::ImageLayout;
 using nav::drivers::IoStatus;
-using nav::drivers::PixelFormat;
 using nav::drivers::pack_mono;
 using nav::drivers::pixel_format_from_pfnc;
+using nav::drivers::PixelFormat;
 using nav::drivers::significant_bits;
 using nav::drivers::unpacked_cv_type;
 
@@ -40,8 +39,10 @@ inline cv::Mat pattern_image(int width, int height, PixelFormat format) {
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
       const uint16_t v = pattern_value(x, y, significant_bits(format));
-      if (format == PixelFormat::kMono8) m.at<uint8_t>(y, x) = static_cast<uint8_t>(v);
-      else m.at<uint16_t>(y, x) = v;
+      if (format == PixelFormat::kMono8)
+        m.at<uint8_t>(y, x) = static_cast<uint8_t>(v);
+      else
+        m.at<uint16_t>(y, x) = v;
     }
   }
   return m;
@@ -50,11 +51,14 @@ inline cv::Mat pattern_image(int width, int height, PixelFormat format) {
 /// Fill-pattern callback (runs on the fake's thread): writes the test pattern in the buffer's
 /// own format and layout. `capacity` points at the payload size the buffers were allocated with
 /// (the fake reports no received size before filling).
-inline void fill_test_pattern(ArvBuffer* buffer, void* capacity, guint32, guint32, ArvPixelFormat pixel_format) {
+inline void fill_test_pattern(ArvBuffer* buffer, void* capacity, guint32, guint32,
+                              ArvPixelFormat pixel_format) {
   const auto format = pixel_format_from_pfnc(pixel_format);
   if (!format) return;
-  const ImageLayout layout{arv_buffer_get_image_width(buffer), arv_buffer_get_image_height(buffer), *format, 0};
-  const std::vector<uint8_t> bytes = pack_mono(pattern_image(layout.width, layout.height, *format), layout);
+  const ImageLayout layout{arv_buffer_get_image_width(buffer), arv_buffer_get_image_height(buffer),
+                           *format, 0};
+  const std::vector<uint8_t> bytes =
+      pack_mono(pattern_image(layout.width, layout.height, *format), layout);
   size_t ignored = 0;
   auto* data = static_cast<uint8_t*>(const_cast<void*>(arv_buffer_get_data(buffer, &ignored)));
   std::memcpy(data, bytes.data(), std::min(*static_cast<const size_t*>(capacity), bytes.size()));
@@ -63,7 +67,8 @@ inline void fill_test_pattern(ArvBuffer* buffer, void* capacity, guint32, guint3
 /// Serves the test pattern from the in-process fake behind `camera` (after open()).
 inline void serve_pattern(const GigeCamera& camera, size_t& capacity) {
   capacity = arv_camera_get_payload(camera.native_handle(), nullptr);
-  ArvFakeCamera* fake = arv_fake_device_get_fake_camera(ARV_FAKE_DEVICE(arv_camera_get_device(camera.native_handle())));
+  ArvFakeCamera* fake = arv_fake_device_get_fake_camera(
+      ARV_FAKE_DEVICE(arv_camera_get_device(camera.native_handle())));
   arv_fake_camera_set_fill_pattern(fake, fill_test_pattern, &capacity);
 }
 
@@ -76,8 +81,9 @@ inline void expect_pattern_stream(GigeCamera& camera, PixelFormat format, int n,
   const cv::Mat expected = pattern_image(camera.width(), camera.height(), format);
   for (int i = 0; i < n; ++i) {
     const IoStatus s = camera.grab(frame, std::chrono::seconds(2));
-    ASSERT_TRUE(s.ok()) << s.message() << " incomplete " << camera.stats().incomplete << " unpack errors "
-                        << camera.stats().unpack_errors << " underruns " << camera.stats().underruns;
+    ASSERT_TRUE(s.ok()) << s.message() << " incomplete " << camera.stats().incomplete
+                        << " unpack errors " << camera.stats().unpack_errors << " underruns "
+                        << camera.stats().underruns;
     ASSERT_EQ(frame.format, format);
     ASSERT_TRUE(frame.time.sensor_time_us.has_value());
     ASSERT_TRUE(frame.arrival_realtime_us.has_value());
@@ -106,7 +112,8 @@ inline void expect_pattern_stream(GigeCamera& camera, PixelFormat format, int n,
 /// (ctest -j) would answer each other's control packets. Held for the lifetime of the object.
 class LoopbackCameraLock {
  public:
-  LoopbackCameraLock() : fd_(::open("/tmp/navd-gige-loopback.lock", O_RDWR | O_CREAT | O_CLOEXEC, 0666)) {
+  LoopbackCameraLock()
+      : fd_(::open("/tmp/navd-gige-loopback.lock", O_RDWR | O_CREAT | O_CLOEXEC, 0666)) {
     if (fd_ >= 0) (void)::flock(fd_, LOCK_EX);
   }
   ~LoopbackCameraLock() {

@@ -10,10 +10,9 @@
 
 #include <chrono>
 #include <cstdint>
+#include <opencv2/core/mat.hpp>
 #include <optional>
 #include <string>
-
-#include <opencv2/core/mat.hpp>
 
 #include "nav/drivers/time/timestamps.h"
 #include "nav/drivers/transports/io_status.h"
@@ -22,7 +21,8 @@
 namespace nav::drivers {
 
 struct CameraFrame {
-  cv::Mat image;  ///< CV_16UC1 (Mono12*, Mono16: sensor counts) or CV_8UC1 (Mono8); reused by grab()
+  cv::Mat
+      image;  ///< CV_16UC1 (Mono12*, Mono16: sensor counts) or CV_8UC1 (Mono8); reused by grab()
   PixelFormat format = PixelFormat::kMono16;
   uint64_t frame_id = 0;      ///< unwrapped, strictly increasing while the stream runs
   uint64_t raw_frame_id = 0;  ///< as sent by the device (GVSP block id, V4L2 sequence)
@@ -36,12 +36,12 @@ struct CameraFrame {
 };
 
 struct CameraStats {
-  uint64_t frames = 0;        ///< complete frames returned by grab()
-  uint64_t incomplete = 0;    ///< buffers dropped because incomplete (missing packets, timeout, size)
-  uint64_t lost = 0;          ///< frames never seen (gaps in the frame id)
-  uint64_t underruns = 0;     ///< frames the back end dropped for lack of a free buffer
-  uint64_t unpack_errors = 0; ///< complete buffers whose layout did not match the pixel format
-  uint64_t restarts = 0;      ///< frame id went backwards (camera restarted its counter)
+  uint64_t frames = 0;      ///< complete frames returned by grab()
+  uint64_t incomplete = 0;  ///< buffers dropped because incomplete (missing packets, timeout, size)
+  uint64_t lost = 0;        ///< frames never seen (gaps in the frame id)
+  uint64_t underruns = 0;   ///< frames the back end dropped for lack of a free buffer
+  uint64_t unpack_errors = 0;  ///< complete buffers whose layout did not match the pixel format
+  uint64_t restarts = 0;       ///< frame id went backwards (camera restarted its counter)
 };
 
 class Camera {

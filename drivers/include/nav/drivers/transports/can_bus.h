@@ -31,7 +31,7 @@ struct CanFrame {
   bool remote = false;    ///< remote transmission request (no data)
   uint8_t dlc = 0;        ///< data length 0..8
   std::array<uint8_t, 8> data{};
-  HostTime received;      ///< host clocks right after the frame was read from the socket
+  HostTime received;  ///< host clocks right after the frame was read from the socket
   /// When the kernel received the frame (SO_TIMESTAMPNS, CLOCK_REALTIME, µs); nullopt when the
   /// socket delivered no timestamp. Closer to the bus than `received` under load.
   std::optional<int64_t> kernel_realtime_us;
@@ -48,11 +48,11 @@ struct CanFilter {
 struct CanBusStats {
   uint64_t frames_received = 0;  ///< data/remote frames returned by receive()
   uint64_t frames_sent = 0;
-  uint64_t filtered_out = 0;     ///< frames that did not pass the filters (user-space check)
-  uint64_t error_frames = 0;     ///< CAN_ERR_FLAG frames (bus-off, error passive, ...)
-  uint32_t last_error_class = 0; ///< CAN_ERR_* class bits of the latest error frame
-  uint64_t malformed = 0;        ///< wrong datagram size or dlc > 8
-  uint64_t kernel_drops = 0;     ///< socket receive-queue overflows (SO_RXQ_OVFL)
+  uint64_t filtered_out = 0;      ///< frames that did not pass the filters (user-space check)
+  uint64_t error_frames = 0;      ///< CAN_ERR_FLAG frames (bus-off, error passive, ...)
+  uint32_t last_error_class = 0;  ///< CAN_ERR_* class bits of the latest error frame
+  uint64_t malformed = 0;         ///< wrong datagram size or dlc > 8
+  uint64_t kernel_drops = 0;      ///< socket receive-queue overflows (SO_RXQ_OVFL)
 };
 
 class CanBus {

@@ -28,9 +28,9 @@
 namespace nav::drivers {
 
 struct EdgeEvent {
-  bool rising = false;       ///< logical level went active (after active-low inversion)
+  bool rising = false;         ///< logical level went active (after active-low inversion)
   int64_t kernel_time_us = 0;  ///< kernel time stamp of the edge (CLOCK_MONOTONIC, µs)
-  HostTime received;         ///< host clocks when the event was read
+  HostTime received;           ///< host clocks when the event was read
 };
 
 class TriggerOutput {
@@ -55,7 +55,7 @@ struct GpioOptions {
   int strobe_line = -1;                 ///< line offset of the strobe input; -1: none
   bool trigger_active_low = false;
   bool strobe_active_low = false;
-  std::string consumer = "navd";        ///< label shown by gpioinfo
+  std::string consumer = "navd";  ///< label shown by gpioinfo
 
   IoStatus validate() const;
 };
@@ -113,9 +113,9 @@ class StrobePulseDecoder {
  public:
   struct Stats {
     uint64_t pulses = 0;
-    uint64_t orphan_edges = 0;    ///< unpaired rising/falling edges
-    uint64_t too_long = 0;        ///< pulses wider than max_width_us
-    uint64_t out_of_order = 0;    ///< edges older than the previous one
+    uint64_t orphan_edges = 0;  ///< unpaired rising/falling edges
+    uint64_t too_long = 0;      ///< pulses wider than max_width_us
+    uint64_t out_of_order = 0;  ///< edges older than the previous one
   };
 
   explicit StrobePulseDecoder(int64_t max_width_us = 1'000'000) : max_width_us_(max_width_us) {}

@@ -22,11 +22,10 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <opencv2/core/mat.hpp>
 #include <optional>
 #include <span>
 #include <vector>
-
-#include <opencv2/core/mat.hpp>
 
 #include "nav/drivers/transports/io_status.h"
 

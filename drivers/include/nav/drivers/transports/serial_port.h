@@ -48,9 +48,9 @@ class SerialPort final : public ByteStream {
   struct Stats {
     uint64_t bytes_read = 0;
     uint64_t bytes_written = 0;
-    uint64_t disconnects = 0;     ///< times the open device vanished
-    uint64_t reconnects = 0;      ///< successful reopens after a disconnect
-    uint64_t open_failures = 0;   ///< failed open attempts (including during reconnection)
+    uint64_t disconnects = 0;    ///< times the open device vanished
+    uint64_t reconnects = 0;     ///< successful reopens after a disconnect
+    uint64_t open_failures = 0;  ///< failed open attempts (including during reconnection)
   };
 
   /// Does not open the device. Invalid options make every call fail with the validate() reason.

@@ -23,8 +23,8 @@ namespace nav::drivers {
 
 /// V4L2 four-character codes we capture (values of V4L2_PIX_FMT_*).
 inline constexpr uint32_t fourcc(char a, char b, char c, char d) {
-  return static_cast<uint32_t>(a) | (static_cast<uint32_t>(b) << 8) | (static_cast<uint32_t>(c) << 16) |
-         (static_cast<uint32_t>(d) << 24);
+  return static_cast<uint32_t>(a) | (static_cast<uint32_t>(b) << 8) |
+         (static_cast<uint32_t>(c) << 16) | (static_cast<uint32_t>(d) << 24);
 }
 inline constexpr uint32_t kV4l2Y16 = fourcc('Y', '1', '6', ' ');
 inline constexpr uint32_t kV4l2Y12 = fourcc('Y', '1', '2', ' ');
@@ -32,7 +32,7 @@ inline constexpr uint32_t kV4l2Grey = fourcc('G', 'R', 'E', 'Y');
 
 struct V4l2Options {
   std::string device = "/dev/video0";
-  int width = 1360;   ///< requested pixels; the driver may adjust, the result is reported
+  int width = 1360;  ///< requested pixels; the driver may adjust, the result is reported
   int height = 1024;
   /// Formats in order of preference; the first one the device offers is used.
   std::vector<uint32_t> formats{kV4l2Y16, kV4l2Y12, kV4l2Grey};
@@ -45,16 +45,18 @@ struct V4l2Options {
 /// Our pixel format for a V4L2 fourcc (Y16 -> Mono16, Y12 -> Mono12, GREY -> Mono8).
 std::optional<PixelFormat> pixel_format_from_v4l2(uint32_t fourcc_code);
 /// First entry of `preferred` that the device `offered`, or nullopt.
-std::optional<uint32_t> choose_v4l2_format(std::span<const uint32_t> offered, std::span<const uint32_t> preferred);
+std::optional<uint32_t> choose_v4l2_format(std::span<const uint32_t> offered,
+                                           std::span<const uint32_t> preferred);
 /// Image layout for a negotiated format; nullopt when bytes_per_line is shorter than a line.
-std::optional<ImageLayout> v4l2_layout(uint32_t fourcc_code, int width, int height, uint32_t bytes_per_line);
+std::optional<ImageLayout> v4l2_layout(uint32_t fourcc_code, int width, int height,
+                                       uint32_t bytes_per_line);
 
 /// What a dequeued V4L2 buffer says about itself (fields of struct v4l2_buffer).
 struct V4l2BufferInfo {
   uint32_t sequence = 0;
-  bool error = false;             ///< V4L2_BUF_FLAG_ERROR: data may be corrupt
-  bool monotonic_clock = false;   ///< V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC
-  int64_t timestamp_us = 0;       ///< buffer time stamp (start of frame for most drivers)
+  bool error = false;            ///< V4L2_BUF_FLAG_ERROR: data may be corrupt
+  bool monotonic_clock = false;  ///< V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC
+  int64_t timestamp_us = 0;      ///< buffer time stamp (start of frame for most drivers)
   uint32_t bytes_used = 0;
 };
 
@@ -62,9 +64,9 @@ struct V4l2BufferInfo {
 /// updates `stats`. The V4L2 time stamp is host CLOCK_MONOTONIC: it becomes
 /// frame.time.sensor_time_us (the camera has no clock of its own here). kInvalidArgument for a
 /// buffer flagged as erroneous or too short (counted as incomplete); `frame` untouched then.
-IoStatus v4l2_buffer_to_frame(std::span<const uint8_t> data, const V4l2BufferInfo& info, const ImageLayout& layout,
-                              const HostTime& received, FrameIdUnwrapper& ids, CameraStats& stats,
-                              CameraFrame& frame);
+IoStatus v4l2_buffer_to_frame(std::span<const uint8_t> data, const V4l2BufferInfo& info,
+                              const ImageLayout& layout, const HostTime& received,
+                              FrameIdUnwrapper& ids, CameraStats& stats, CameraFrame& frame);
 
 class V4l2Camera final : public Camera {
  public:
