@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <thread>
@@ -99,9 +100,9 @@ TEST_F(GigeCameraLoopback, SoftwareTriggerGivesOneFramePerTrigger) {
 class FakeGvProcess {
  public:
   FakeGvProcess(const std::string& serial, int lost_per_thousand) {
+    const std::string ratio = std::to_string(lost_per_thousand);  // no allocation after fork()
     pid_ = ::fork();
     if (pid_ == 0) {
-      const std::string ratio = std::to_string(lost_per_thousand);
       ::execl(NAV_ARV_FAKE_GV_CAMERA, NAV_ARV_FAKE_GV_CAMERA, "-i", "127.0.0.1", "-s",
               serial.c_str(), "-r", ratio.c_str(), static_cast<char*>(nullptr));
       ::_exit(127);
@@ -125,8 +126,10 @@ class FakeGvProcess {
 };
 
 TEST(GigeCameraLoss, DroppedPacketsAreCountedAsIncompleteBuffers) {
-  if (std::string(NAV_ARV_FAKE_GV_CAMERA).empty())
-    GTEST_SKIP() << "arv-fake-gv-camera-0.8 not found at configure time";
+  if (!std::filesystem::exists(NAV_ARV_FAKE_GV_CAMERA)) {
+    GTEST_SKIP() << "arv-fake-gv-camera-0.8 not found at configure time (" NAV_ARV_FAKE_GV_CAMERA
+                    ")";
+  }
   const std::string serial = "NAVLOSS" + std::to_string(::getpid() % 100000);
   nav::testing::LoopbackCameraLock lock;
   FakeGvProcess fake(serial, 20);  // 2 % of GVSP packets lost, resends never answered
