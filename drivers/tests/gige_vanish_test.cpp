@@ -1,7 +1,8 @@
 // A GigE Vision camera that vanishes mid-stream (power or cable lost): Aravis' heartbeat
 // declares "control lost" and GigeCamera::grab() reports kDisconnected instead of timing out
-// forever; closing afterwards neither hangs nor crashes. Uses Aravis' fake on loopback and
-// takes about 15 s (Aravis' fixed heartbeat retry schedule), hence its own executable.
+// forever; closing afterwards neither hangs nor crashes, and reopening after the camera comes
+// back resumes the stream. Uses Aravis' fake on loopback and takes about 15 s (Aravis' fixed
+// heartbeat retry schedule), hence its own executable.
 
 #include <arv.h>
 #include <gtest/gtest.h>
@@ -17,7 +18,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-TEST(GigeCameraVanish, CameraVanishingMidStreamIsReportedAsDisconnected) {
+TEST(GigeCameraVanish, CameraVanishingMidStreamIsReportedThenReopened) {
   nav::testing::LoopbackCameraLock lock;
   ArvGvFakeCamera* gv = arv_gv_fake_camera_new("lo", "NAVVANISH");
   if (gv == nullptr || !arv_gv_fake_camera_is_running(gv)) {
@@ -46,6 +47,16 @@ TEST(GigeCameraVanish, CameraVanishingMidStreamIsReportedAsDisconnected) {
   EXPECT_NE(s.message().find("control lost"), std::string::npos);
   camera->close();  // must not hang or crash with the device gone
   EXPECT_FALSE(camera->start().ok());
+
+  // Power back: the driver reopens the same id and frames resume.
+  gv = arv_gv_fake_camera_new("lo", "NAVVANISH");
+  ASSERT_TRUE(gv != nullptr && arv_gv_fake_camera_is_running(gv));
+  const IoStatus reopened = camera->open();
+  const IoStatus restarted = reopened.ok() ? camera->start() : reopened;
+  const IoStatus resumed = restarted.ok() ? camera->grab(frame, 2s) : restarted;
+  camera->close();
+  g_object_unref(gv);
+  EXPECT_TRUE(resumed.ok()) << resumed.message();
 }
 
 }  // namespace
