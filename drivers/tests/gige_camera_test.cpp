@@ -49,6 +49,12 @@ TEST(GigeOptions, ValidateNamesTheBadField) {
   o.buffer_count = 1;
   EXPECT_NE(o.validate().message().find("buffer_count"), std::string::npos);
   o = GigeOptions{};
+  o.width = 640;  // height left 0
+  EXPECT_NE(o.validate().message().find("region"), std::string::npos);
+  o = GigeOptions{};
+  o.packet_size_bytes = 100;
+  EXPECT_NE(o.validate().message().find("packet_size_bytes"), std::string::npos);
+  o = GigeOptions{};
   o.frame_id_bits = 32;
   EXPECT_FALSE(o.validate().ok());
   o = GigeOptions{};
@@ -124,12 +130,19 @@ TEST_F(GigeCameraFake, TwelveBitFormatsThroughACustomGenicamDescription) {
   ASSERT_FALSE(xml.empty()) << "stock fake XML has no PixelFormatRegister anchor";
   arv_set_fake_camera_genicam_filename(xml.c_str());
   for (PixelFormat format : {PixelFormat::kMono12Packed, PixelFormat::kMono12}) {
-    GigeCamera camera(fake_options(format));
+    GigeOptions o = fake_options(format);
+    o.offset_x = 2;
+    o.offset_y = 3;
+    o.width = 333;  // odd: with Mono12Packed, line 1 starts in the middle of a 3-byte group
+    o.height = 20;
+    GigeCamera camera(o);
     const IoStatus s = camera.open();
     ASSERT_TRUE(s.ok()) << s.message();
     size_t capacity = 0;
     serve_pattern(camera, capacity);
     ASSERT_TRUE(camera.start().ok());
+    EXPECT_EQ(camera.width(), 333);
+    EXPECT_EQ(camera.height(), 20);
     expect_pattern_stream(camera, format, 4, false);
   }
   arv_set_fake_camera_genicam_filename(nullptr);

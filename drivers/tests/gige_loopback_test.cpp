@@ -83,7 +83,9 @@ TEST_F(GigeCameraLoopback, StreamsOverGvspWithDeviceTimestampsAcrossTheIdWrap) {
 TEST_F(GigeCameraLoopback, SoftwareTriggerGivesOneFramePerTrigger) {
   GigeOptions o = options(PixelFormat::kMono8);
   o.trigger_mode = TriggerMode::kSoftware;
+  o.packet_size_bytes = 1000;  // fixed instead of negotiated
   ASSERT_TRUE(open(o).ok());
+  EXPECT_EQ(arv_camera_gv_get_packet_size(camera_->native_handle(), nullptr), 1000u);
   ASSERT_TRUE(camera_->start().ok());
   CameraFrame frame;
   EXPECT_EQ(camera_->grab(frame, 300ms).code(), IoCode::kTimeout);  // free-run would give ~150

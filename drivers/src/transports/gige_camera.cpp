@@ -44,6 +44,12 @@ IoStatus GigeOptions::validate() const {
   if (gain && !(*gain >= 0.0 && *gain < 1e6)) return bad("options.gain must be finite and >= 0");
   if (!(frame_rate_hz >= 0.0 && frame_rate_hz < 1e6))
     return bad("options.frame_rate_hz must be >= 0");
+  if (offset_x < 0 || offset_y < 0 || width < 0 || height < 0 || (width == 0) != (height == 0)) {
+    return bad("options region: offsets >= 0, width and height both 0 or both > 0");
+  }
+  if (packet_size_bytes != 0 && (packet_size_bytes < 576 || packet_size_bytes > 65535)) {
+    return bad("options.packet_size_bytes must be 0 (auto) or 576..65535");
+  }
   if (buffer_count < 2 || buffer_count > 256) return bad("options.buffer_count must be in 2..256");
   if (frame_id_bits != 16 && frame_id_bits != 64)
     return bad("options.frame_id_bits must be 16 or 64");
@@ -122,10 +128,20 @@ IoStatus GigeCamera::configure() {
       break;
   }
   if (s = take_error(error, name_, "trigger / frame rate"); !s.ok()) return s;
+  if (options_.width > 0) {
+    arv_camera_set_region(camera_, options_.offset_x, options_.offset_y, options_.width,
+                          options_.height, &error);
+    if (s = take_error(error, name_, "region of interest"); !s.ok()) return s;
+  }
   if (arv_camera_is_gv_device(camera_)) {
-    // Largest packet the path supports; on failure the 1500-byte default still works.
-    arv_camera_gv_auto_packet_size(camera_, &error);
-    g_clear_error(&error);
+    if (options_.packet_size_bytes > 0) {
+      arv_camera_gv_set_packet_size(camera_, options_.packet_size_bytes, &error);
+      if (s = take_error(error, name_, "packet size"); !s.ok()) return s;
+    } else {
+      // Largest packet the path supports; on failure the 1500-byte default still works.
+      arv_camera_gv_auto_packet_size(camera_, &error);
+      g_clear_error(&error);
+    }
   }
   gint x = 0, y = 0, w = 0, h = 0;
   arv_camera_get_region(camera_, &x, &y, &w, &h, &error);

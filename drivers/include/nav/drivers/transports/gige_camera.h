@@ -46,6 +46,15 @@ struct GigeOptions {
   std::string trigger_source = "Line1";
   /// Free-running frame rate in Hz; 0 leaves the camera's setting.
   double frame_rate_hz = 0.0;
+  /// Region of interest in sensor pixels; width/height 0 keep the camera's current frame. The
+  /// camera may round to its increments: width()/height() report what it set.
+  int offset_x = 0;
+  int offset_y = 0;
+  int width = 0;
+  int height = 0;
+  /// GVSP packet size in bytes (GevSCPSPacketSize), 576..65535; 0 negotiates the largest packet
+  /// the network path carries (jumbo frames on a dedicated camera NIC).
+  int packet_size_bytes = 0;
   /// Buffers queued to the stream, 2..256. More buffers absorb longer vision-thread stalls.
   int buffer_count = 8;
   /// Width of the device frame counter: 16 for GigE Vision 1.x block ids (0 skipped on wrap),
