@@ -1,3 +1,6 @@
+// Host receive time stamps (ARCHITECTURE.md "Time"): CLOCK_MONOTONIC and CLOCK_REALTIME read
+// with clock_gettime(2) (POSIX.1-2017) right after a transport returns bytes.
+
 #include <ctime>
 
 #include "nav/drivers/time/timestamps.h"
