@@ -81,11 +81,11 @@ TEST(GpioOptions, ValidateNamesTheBadField) {
   EXPECT_FALSE(o.validate().ok());
 }
 
-TEST(GpiodLines, MissingChipIsReportedWithItsPath) {
+TEST(GpioLines, MissingChipIsReportedWithItsPath) {
   GpioOptions o;
   o.chip = "/dev/gpiochip-navd-missing";
   o.trigger_line = 0;
-  GpiodLines lines(o);
+  GpioLines lines(o);
   const IoStatus s = lines.open();
   EXPECT_FALSE(s.ok());
   EXPECT_NE(s.message().find(o.chip), std::string::npos) << s.message();
@@ -94,7 +94,7 @@ TEST(GpiodLines, MissingChipIsReportedWithItsPath) {
   EXPECT_EQ(lines.wait_edge(e, 1ms).code(), IoCode::kInvalidArgument);
 }
 
-TEST(GpiodLines, DrivesAndReadsARealChip) {
+TEST(GpioLines, DrivesAndReadsARealChip) {
   const char* env = std::getenv("NAV_GPIO_CHIP");
   const std::string chip = env != nullptr ? env : "/dev/gpiochip0";
   if (!std::filesystem::exists(chip))
@@ -103,7 +103,7 @@ TEST(GpiodLines, DrivesAndReadsARealChip) {
   o.chip = chip;
   o.trigger_line = 0;
   o.strobe_line = 1;
-  GpiodLines lines(o);
+  GpioLines lines(o);
   const IoStatus s = lines.open();
   ASSERT_TRUE(s.ok()) << s.message();
   EXPECT_TRUE(lines.pulse(100us).ok());

@@ -6,11 +6,11 @@
 // (CLOCK_MONOTONIC on Linux >= 5.7). Image times in navd come from the strobe: the exposure
 // mid-point of each StrobePulse.
 //
-// TriggerOutput and EdgeInput are the interfaces drivers use; GpiodLines implements both on a
+// TriggerOutput and EdgeInput are the interfaces drivers use; GpioLines implements both on a
 // gpiochip, LoopbackGpio in memory (the trigger output wired to the strobe input) for tests and
 // replay. StrobePulseDecoder pairs edges into pulses (pure).
 //
-// Threading: one driver thread owns a GpiodLines; wait_edge() blocks for at most its timeout.
+// Threading: one driver thread owns a GpioLines; wait_edge() blocks for at most its timeout.
 // LoopbackGpio is thread-safe (set/pulse from one thread, wait_edge from another).
 
 #include <chrono>
@@ -60,12 +60,12 @@ struct GpioOptions {
   IoStatus validate() const;
 };
 
-class GpiodLines final : public TriggerOutput, public EdgeInput {
+class GpioLines final : public TriggerOutput, public EdgeInput {
  public:
-  explicit GpiodLines(GpioOptions options);
-  ~GpiodLines() override;
-  GpiodLines(const GpiodLines&) = delete;
-  GpiodLines& operator=(const GpiodLines&) = delete;
+  explicit GpioLines(GpioOptions options);
+  ~GpioLines() override;
+  GpioLines(const GpioLines&) = delete;
+  GpioLines& operator=(const GpioLines&) = delete;
 
   /// Opens the chip and requests the configured lines (trigger driven inactive at once).
   /// kDisconnected when the chip is missing, kBusy when a line is taken by another consumer.

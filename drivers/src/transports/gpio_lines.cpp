@@ -2,14 +2,14 @@
 // C++ binding (see gpio_lines.h). libgpiod reports failures as std::system_error; they are
 // converted to IoStatus here and never escape.
 
+#include "nav/drivers/transports/gpio_lines.h"
+
 #include <gpiod.hpp>
 #include <system_error>
 
-#include "nav/drivers/transports/gpio_lines.h"
-
 namespace nav::drivers {
 
-struct GpiodLines::Impl {
+struct GpioLines::Impl {
   gpiod::chip chip;
   gpiod::line trigger;
   gpiod::line strobe;
@@ -41,12 +41,12 @@ IoStatus GpioOptions::validate() const {
   return IoStatus::Ok();
 }
 
-GpiodLines::GpiodLines(GpioOptions options)
+GpioLines::GpioLines(GpioOptions options)
     : options_(std::move(options)), options_status_(options_.validate()) {}
 
-GpiodLines::~GpiodLines() { close(); }
+GpioLines::~GpioLines() { close(); }
 
-IoStatus GpiodLines::open() {
+IoStatus GpioLines::open() {
   if (!options_status_.ok()) return options_status_;
   close();
   auto impl = std::make_unique<Impl>();
@@ -79,7 +79,7 @@ IoStatus GpiodLines::open() {
   return IoStatus::Ok();
 }
 
-void GpiodLines::close() {
+void GpioLines::close() {
   if (!impl_) return;
   try {
     if (impl_->has_trigger) impl_->trigger.set_value(0);
@@ -91,7 +91,7 @@ void GpiodLines::close() {
   impl_.reset();
 }
 
-IoStatus GpiodLines::set(bool active) {
+IoStatus GpioLines::set(bool active) {
   if (!impl_ || !impl_->has_trigger) {
     return IoStatus::Error(IoCode::kInvalidArgument, options_.chip, "set: no trigger line open");
   }
@@ -103,7 +103,7 @@ IoStatus GpiodLines::set(bool active) {
   return IoStatus::Ok();
 }
 
-IoStatus GpiodLines::wait_edge(EdgeEvent& event, std::chrono::milliseconds timeout) {
+IoStatus GpioLines::wait_edge(EdgeEvent& event, std::chrono::milliseconds timeout) {
   if (!impl_ || !impl_->has_strobe) {
     return IoStatus::Error(IoCode::kInvalidArgument, options_.chip,
                            "wait_edge: no strobe line open");
