@@ -183,6 +183,8 @@ TEST(SerialPort, CarriesDataBothWaysUntranslated) {
       port.write({reinterpret_cast<const uint8_t*>(command.data()), command.size()}, 1s).ok());
   EXPECT_EQ(pty.receive(command.size(), 2s), command);
   EXPECT_EQ(port.stats().bytes_written, command.size());
+  EXPECT_EQ(port.read({}, 1ms).status.code(), IoCode::kInvalidArgument);  // not a hang-up
+  EXPECT_TRUE(port.is_open());
   EXPECT_EQ(port.stats().bytes_read, sensor_bytes.size());
 }
 

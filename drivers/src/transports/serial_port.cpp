@@ -121,6 +121,10 @@ IoStatus SerialPort::ensure_open(Clock::time_point now) {
 }
 
 ReadResult SerialPort::read(std::span<uint8_t> buffer, std::chrono::milliseconds timeout) {
+  if (buffer.empty()) {  // read(2) of 0 bytes returns 0, which would look like a hang-up
+    return {
+        IoStatus::Error(IoCode::kInvalidArgument, options_.device, "read: empty buffer"), 0, {}};
+  }
   const auto deadline = Clock::now() + timeout;
   for (;;) {
     IoStatus open_status = ensure_open(Clock::now());
