@@ -1,17 +1,33 @@
 #pragma once
-// navtool subcommands. Each lives in its own cmd_<name>.cpp and adds itself to the CLI11 app
-// here; main.cpp calls every add_*_command in turn. A subcommand's callback returns through
-// CLI11 (exit code via nav::tool::ExitCode) and prints machine-readable output on stdout only.
+// navtool subcommands. Each lives in its own cmd_<name>.cpp and registers itself with a
+// file-scope `const CommandRegistration kRegister{"name", add_fn};`, so adding a subcommand
+// never edits a shared file. main.cpp adds every registered command, sorted by name.
+// A subcommand prints machine-readable output on stdout only; messages go to stderr.
 
 #include <CLI/CLI.hpp>
 
+#include <functional>
+#include <map>
+#include <stdexcept>
+#include <string>
+
 namespace nav::tool {
 
-/// Thrown by a subcommand to end navtool with a message on stderr and a non-zero status.
+/// Thrown by a subcommand to end navtool with a message on stderr and exit status 1.
 struct CommandError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// --- registered subcommands (one line per cmd_<name>.cpp) ---
+/// Adds one subcommand (and its callback) to the application.
+using AddCommandFn = std::function<void(CLI::App& app)>;
+
+/// All registered subcommands by name (filled before main() by CommandRegistration objects).
+std::map<std::string, AddCommandFn>& command_registry();
+
+struct CommandRegistration {
+  CommandRegistration(const std::string& name, AddCommandFn add) {
+    command_registry().emplace(name, std::move(add));
+  }
+};
 
 }  // namespace nav::tool

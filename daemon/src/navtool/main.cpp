@@ -1,16 +1,20 @@
 // navtool: offline companion of navd (simulate, replay, covariance, parse, register, report).
-// Each subcommand is registered from its own file; see commands.h.
-#include <spdlog/spdlog.h>
-
+// Each subcommand registers itself from its own cmd_<name>.cpp; see commands.h.
 #include <cstdio>
 
 #include "navtool/commands.h"
 
+namespace nav::tool {
+std::map<std::string, AddCommandFn>& command_registry() {
+  static std::map<std::string, AddCommandFn> registry;
+  return registry;
+}
+}  // namespace nav::tool
+
 int main(int argc, char** argv) {
   CLI::App app{"navtool: offline tools for the navd navigation daemon"};
   app.require_subcommand(1);
-  // --- subcommand registration (keep in the order of commands.h) ---
-
+  for (const auto& [name, add] : nav::tool::command_registry()) add(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,12 +1,13 @@
 #pragma once
 // Formats known to `navtool parse`. Each format decodes a byte stream with the drivers' codecs
 // and writes one JSON object per decoded record (one line each) to `records`, accumulating the
-// decoder's counters in `stats`. Formats are grouped by the file that implements them.
+// decoder's counters in `stats`. A format registers itself from the file that implements it
+// (parse_formats_<group>.cpp) with a file-scope `const ParseFormatRegistration`.
 
 #include <functional>
 #include <iosfwd>
+#include <map>
 #include <string>
-#include <vector>
 
 #include "nav/drivers/codecs/decode_stats.h"
 
@@ -17,14 +18,19 @@ struct ParseOptions {
 };
 
 struct ParseFormat {
-  std::string name;  ///< value of --format
   std::string help;  ///< one line for --help
   std::function<void(std::istream& in, std::ostream& records, nav::drivers::DecodeStats& stats,
                      const ParseOptions& options)>
       run;
 };
 
-std::vector<ParseFormat> dvl_parse_formats();    ///< pd0, pd6 (parse_formats_dvl.cpp)
-std::vector<ParseFormat> ascii_parse_formats();  ///< nmea, kvh, paro, altimeter, can (parse_formats_ascii.cpp)
+/// Every registered format by its --format name.
+std::map<std::string, ParseFormat>& parse_format_registry();
+
+struct ParseFormatRegistration {
+  ParseFormatRegistration(const std::string& name, ParseFormat format) {
+    parse_format_registry().emplace(name, std::move(format));
+  }
+};
 
 }  // namespace nav::tool
