@@ -1,0 +1,93 @@
+#pragma once
+// Exact marginal covariances of a sparse SPD information matrix without a dense inverse:
+// the ground truth that covariance bounds are checked against (ARCHITECTURE.md "Core math").
+//
+// Method: CHOLMOD supernodal Cholesky P Lambda P^T = L L^T with a fill-reducing ordering,
+// then selected inversion by the Takahashi recurrences (Takahashi, Fagan & Chen 1973;
+// Erisman & Tinney 1975; supernodal form as in Lin et al., "SelInv", ACM TOMS 2011): for each
+// supernode with columns J and below-diagonal rows R, processed from the last to the first,
+//     Sigma_RJ = -Sigma_RR L_RJ L_JJ^-1,
+//     Sigma_JJ = L_JJ^-T (I + L_RJ^T Sigma_RR L_RJ) L_JJ^-1,
+// where Sigma_RR is already known because every pair of rows in R lies in the pattern of L.
+// The result is Sigma = Lambda^-1 exactly (up to rounding) on the pattern of L, which contains
+// the pattern of Lambda: every diagonal block and every block (a, b) with Lambda_ab != 0.
+//
+// Blocks: the scalar dimension n must be a multiple of block_dim; block b is scalar indices
+// [b*block_dim, (b+1)*block_dim).
+//
+// Typical use (ground truth for bounds):
+//   auto em = ExactMarginals::compute(Lambda, 6);
+//   Eigen::MatrixXd S_ii = em.marginal(i);      // 6x6
+//   Eigen::MatrixXd S_ri = em.joint(r, i);      // 12x12 [[S_rr S_ri]; [S_ir S_ii]]
+//
+// Not thread-safe for concurrent joint() calls that fall outside the pattern (they use the
+// CHOLMOD workspace); marginal() and in-pattern joint() are const and read-only.
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include <memory>
+#include <stdexcept>
+
+namespace nav::core {
+
+/// Lambda is not symmetric positive definite (CHOLMOD reported a non-positive pivot), or its
+/// size is not a multiple of the block size. what() names the column/size.
+class ExactMarginalsError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Fill-reducing ordering used for the factorisation.
+enum class MarginalsOrdering {
+  kBlockAmd,     ///< AMD on the block graph, expanded to scalars (default; fastest on pose graphs)
+  kCholmodAuto,  ///< CHOLMOD's default choice (scalar AMD, METIS if AMD fills badly)
+};
+
+class ExactMarginals {
+ public:
+  /// Factors Lambda (both triangles stored, or at least the lower one: only the lower
+  /// triangle is read) and runs the selected inversion. Throws ExactMarginalsError if Lambda is
+  /// not SPD or its size is not a multiple of block_dim, std::invalid_argument if block_dim < 1.
+  static ExactMarginals compute(const Eigen::SparseMatrix<double>& Lambda, int block_dim,
+                                MarginalsOrdering ordering = MarginalsOrdering::kBlockAmd);
+
+  ExactMarginals(ExactMarginals&&) noexcept;
+  ExactMarginals& operator=(ExactMarginals&&) noexcept;
+  ~ExactMarginals();
+
+  int block_dim() const;
+  int num_blocks() const;
+
+  /// Sigma_bb, block_dim x block_dim, exact. O(block_dim^2 log) lookups, no solve.
+  Eigen::MatrixXd marginal(int block) const;
+
+  /// Joint covariance of blocks a and b: 2d x 2d [[S_aa S_ab]; [S_ba S_bb]] (a == b allowed:
+  /// then all four quadrants equal S_aa). When S_ab is inside the pattern of L (e.g. a and b
+  /// adjacent in Lambda) it is read from the selected inverse; otherwise the d columns of
+  /// block b are solved exactly with the factor, Lambda X = E_b (two triangular solves,
+  /// O(nnz(L) d)), and S_ab is read from X. Either way the result is exact.
+  Eigen::MatrixXd joint(int a, int b) const;
+
+  /// True when every entry of the off-diagonal block (a, b) lies in the pattern of L, i.e.
+  /// joint(a, b) needs no solve.
+  bool in_pattern(int a, int b) const;
+
+  /// Sigma_ij for scalar indices, if (i, j) is in the pattern of L; otherwise throws
+  /// std::out_of_range. For tests and for callers that need single entries.
+  double entry(Eigen::Index i, Eigen::Index j) const;
+
+  /// Wall time of the CHOLMOD analyse + factorise, and of the selected inversion, in ms
+  /// (steady clock; for reporting only).
+  double factor_ms() const;
+  double inversion_ms() const;
+  /// Number of stored entries of L (= of the selected inverse), including supernode padding.
+  Eigen::Index factor_nnz() const;
+
+ private:
+  struct Impl;
+  explicit ExactMarginals(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace nav::core
