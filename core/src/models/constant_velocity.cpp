@@ -1,0 +1,94 @@
+// Constant-velocity process model, first-order discretisation (constant_velocity.h).
+
+#include "nav/core/models/constant_velocity.h"
+
+#include "nav/core/geometry/rotation.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace nav::core {
+namespace {
+
+void require_valid_dt(double dt_s, const char* where) {
+  if (std::isfinite(dt_s) && dt_s > 0.0) return;
+  std::ostringstream msg;
+  msg << "ConstantVelocityModel::" << where << ": dt_s = " << dt_s
+      << " s, expected finite and > 0";
+  throw std::invalid_argument(msg.str());
+}
+
+Status check_psd(const Vec3& psd, const char* field) {
+  for (int k = 0; k < 3; ++k) {
+    if (!std::isfinite(psd[k]) || psd[k] < 0.0) {
+      std::ostringstream msg;
+      msg << "ConstantVelocityOptions." << field << "[" << k << "] = " << psd[k]
+          << ", expected finite and >= 0";
+      return Status::Error(StatusCode::kInvalidArgument, msg.str());
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status ConstantVelocityOptions::validate() const {
+  if (Status s = check_psd(accel_psd, "accel_psd"); !s.ok()) return s;
+  return check_psd(angular_accel_psd, "angular_accel_psd");
+}
+
+ConstantVelocityModel::ConstantVelocityModel(const ConstantVelocityOptions& options)
+    : options_(options) {
+  if (Status s = options_.validate(); !s.ok()) throw std::invalid_argument(s.message());
+}
+
+Vec12 ConstantVelocityModel::predict(const Vec12& x, double dt_s, Mat12* F) const {
+  require_valid_dt(dt_s, "predict");
+  require_regular_pitch(x[kPitch], "ConstantVelocityModel::predict");
+  const Vec3 rpy = x.segment<3>(kRoll);
+  const Vec3 v_body = x.segment<3>(kU);
+  const Vec3 omega_body = x.segment<3>(kP);
+  const Mat3 R_world_body = rotation_from_euler(rpy);
+  const Mat3 J2 = euler_rate_matrix(rpy);
+
+  Vec12 x_next = x;
+  x_next.segment<3>(kX) += dt_s * R_world_body * v_body;
+  x_next.segment<3>(kRoll) += dt_s * J2 * omega_body;
+  for (int k = kRoll; k <= kHeading; ++k) x_next[k] = wrap_angle(x_next[k]);
+
+  if (F != nullptr) {
+    F->setIdentity();
+    F->block<3, 1>(kX, kRoll) += dt_s * dR_droll(rpy) * v_body;
+    F->block<3, 1>(kX, kPitch) += dt_s * dR_dpitch(rpy) * v_body;
+    F->block<3, 1>(kX, kHeading) += dt_s * dR_dheading(rpy) * v_body;
+    F->block<3, 3>(kX, kU) = dt_s * R_world_body;
+    F->block<3, 1>(kRoll, kRoll) += dt_s * dJ2_droll(rpy) * omega_body;
+    F->block<3, 1>(kRoll, kPitch) += dt_s * dJ2_dpitch(rpy) * omega_body;
+    F->block<3, 3>(kRoll, kP) = dt_s * J2;
+  }
+  return x_next;
+}
+
+Mat12 ConstantVelocityModel::process_noise(const Vec12& x, double dt_s) const {
+  require_valid_dt(dt_s, "process_noise");
+  require_regular_pitch(x[kPitch], "ConstantVelocityModel::process_noise");
+  const Vec3 rpy = x.segment<3>(kRoll);
+  Mat6 B = Mat6::Zero();
+  B.topLeftCorner<3, 3>() = rotation_from_euler(rpy);
+  B.bottomRightCorner<3, 3>() = euler_rate_matrix(rpy);
+  Vec6 qc;
+  qc << options_.accel_psd, options_.angular_accel_psd;
+  const Mat6 Qc = qc.asDiagonal();
+  const Mat6 BQc = B * Qc;
+
+  Mat12 Q;
+  Q.topLeftCorner<6, 6>() = (dt_s * dt_s * dt_s / 3.0) * BQc * B.transpose();
+  Q.topRightCorner<6, 6>() = (dt_s * dt_s / 2.0) * BQc;
+  Q.bottomLeftCorner<6, 6>() = (dt_s * dt_s / 2.0) * BQc.transpose();
+  Q.bottomRightCorner<6, 6>() = dt_s * Qc;
+  // Exact symmetry for the information-form update.
+  return 0.5 * (Q + Q.transpose());
+}
+
+}  // namespace nav::core
