@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -17,7 +18,7 @@ bool pitch_is_singular(double pitch_rad) {
 void require_regular_pitch(double pitch_rad, const char* where) {
   if (!pitch_is_singular(pitch_rad)) return;
   std::ostringstream msg;
-  msg << where << ": pitch " << pitch_rad << " rad (" << pitch_rad * 180.0 / std::numbers::pi
+  msg << std::setprecision(10) << where << ": pitch " << pitch_rad << " rad (" << pitch_rad * 180.0 / std::numbers::pi
       << " deg) is beyond +-" << kMaxAbsPitchRad * 180.0 / std::numbers::pi
       << " deg, where the Euler-angle rate matrix is singular";
   throw std::domain_error(msg.str());
