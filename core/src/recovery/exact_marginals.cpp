@@ -1,0 +1,405 @@
+// Exact marginals by CHOLMOD supernodal Cholesky + supernodal Takahashi selected inversion
+// (recovery/exact_marginals.h; Takahashi, Fagan & Chen 1973; Lin et al., SelInv, TOMS 2011).
+//
+// Storage: the selected inverse Sigma uses exactly the layout of CHOLMOD's supernodal L:
+// supernode s owns columns super[s]..super[s+1]-1, a sorted row list s_rows (its own columns
+// first) and a column-major nrows x ncols value block at offset px[s]. The diagonal block of
+// each supernode is stored in full (both triangles) so gathers never need to transpose.
+// Indices are in the permuted order of the factor: Sigma_A(Perm[i], Perm[j]) = Sigma_P(i, j).
+
+#include "nav/core/recovery/exact_marginals.h"
+
+#include <cholmod.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <chrono>
+#include <string>
+#include <vector>
+
+namespace nav::core {
+
+namespace {
+
+using MatMap = Eigen::Map<Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
+using ConstMatMap = Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+struct ExactMarginals::Impl {
+  int block_dim = 0;
+  int n = 0;
+  mutable cholmod_common common{};
+  cholmod_factor* L = nullptr;
+  std::vector<double> sigma;   // same layout as L->x
+  std::vector<int> col_super;  // supernode of each (permuted) column
+  std::vector<int> inv_perm;   // inv_perm[original] = permuted
+  double factor_ms = 0.0;
+  double inversion_ms = 0.0;
+
+  Impl() { cholmod_start(&common); }
+  ~Impl() {
+    if (L != nullptr) cholmod_free_factor(&L, &common);
+    cholmod_finish(&common);
+  }
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+
+  const int* super() const { return static_cast<const int*>(L->super); }
+  const int* pi() const { return static_cast<const int*>(L->pi); }
+  const int* px() const { return static_cast<const int*>(L->px); }
+  const int* rows() const { return static_cast<const int*>(L->s); }
+
+  /// Offset into sigma of permuted entry (i, j), or -1 if not in the pattern.
+  std::ptrdiff_t offset(int i, int j) const {
+    if (i < j) std::swap(i, j);
+    const int s = col_super[static_cast<size_t>(j)];
+    const int* first = rows() + pi()[s];
+    const int* last = rows() + pi()[s + 1];
+    const int* it = std::lower_bound(first, last, i);
+    if (it == last || *it != i) return -1;
+    const std::ptrdiff_t nrows = last - first;
+    return px()[s] + static_cast<std::ptrdiff_t>(j - super()[s]) * nrows + (it - first);
+  }
+
+  void factor(const Eigen::SparseMatrix<double>& Lambda, MarginalsOrdering ordering);
+  void invert();
+};
+
+namespace {
+
+/// Lower triangle of Lambda as a CHOLMOD matrix (stype -1). Caller frees.
+cholmod_sparse* lower_to_cholmod(const Eigen::SparseMatrix<double>& Lambda, cholmod_common* c) {
+  const int n = static_cast<int>(Lambda.rows());
+  size_t nnz = 0;
+  for (int j = 0; j < n; ++j) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Lambda, j); it; ++it) {
+      if (it.row() >= j) ++nnz;
+    }
+  }
+  cholmod_sparse* A = cholmod_allocate_sparse(n, n, nnz, /*sorted=*/1, /*packed=*/1,
+                                              /*stype=*/-1, CHOLMOD_REAL, c);
+  if (A == nullptr) throw ExactMarginalsError("ExactMarginals: CHOLMOD allocation failed");
+  auto* Ap = static_cast<int*>(A->p);
+  auto* Ai = static_cast<int*>(A->i);
+  auto* Ax = static_cast<double*>(A->x);
+  int k = 0;
+  for (int j = 0; j < n; ++j) {
+    Ap[j] = k;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Lambda, j); it; ++it) {
+      if (it.row() >= j) {
+        Ai[k] = static_cast<int>(it.row());
+        Ax[k] = it.value();
+        ++k;
+      }
+    }
+  }
+  Ap[n] = k;
+  return A;
+}
+
+/// Fill-reducing ordering of the block graph (AMD), expanded to scalars: block order first,
+/// the block_dim scalars of a block kept together and in order.
+std::vector<int> block_amd_ordering(const Eigen::SparseMatrix<double>& Lambda, int block_dim,
+                                    cholmod_common* c) {
+  const int n = static_cast<int>(Lambda.rows());
+  const int nb = n / block_dim;
+  std::vector<std::vector<int>> lower(static_cast<size_t>(nb));
+  for (int j = 0; j < n; ++j) {
+    const int bj = j / block_dim;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Lambda, j); it; ++it) {
+      const int bi = static_cast<int>(it.row()) / block_dim;
+      if (bi > bj) lower[static_cast<size_t>(bj)].push_back(bi);
+    }
+  }
+  size_t nnz = 0;
+  for (auto& col : lower) {
+    std::sort(col.begin(), col.end());
+    col.erase(std::unique(col.begin(), col.end()), col.end());
+    nnz += col.size() + 1;
+  }
+  cholmod_sparse* B = cholmod_allocate_sparse(nb, nb, nnz, 1, 1, -1, CHOLMOD_PATTERN, c);
+  if (B == nullptr) throw ExactMarginalsError("ExactMarginals: CHOLMOD allocation failed");
+  auto* Bp = static_cast<int*>(B->p);
+  auto* Bi = static_cast<int*>(B->i);
+  int k = 0;
+  for (int j = 0; j < nb; ++j) {
+    Bp[j] = k;
+    Bi[k++] = j;
+    for (int i : lower[static_cast<size_t>(j)]) Bi[k++] = i;
+  }
+  Bp[nb] = k;
+  std::vector<int> block_perm(static_cast<size_t>(nb));
+  const int ok = cholmod_amd(B, nullptr, 0, block_perm.data(), c);
+  cholmod_free_sparse(&B, c);
+  if (!ok) throw ExactMarginalsError("ExactMarginals: block AMD ordering failed");
+  std::vector<int> perm(static_cast<size_t>(n));
+  for (int b = 0; b < nb; ++b) {
+    for (int k2 = 0; k2 < block_dim; ++k2) {
+      perm[static_cast<size_t>(b * block_dim + k2)] = block_perm[static_cast<size_t>(b)] *
+                                                           block_dim + k2;
+    }
+  }
+  return perm;
+}
+
+}  // namespace
+
+void ExactMarginals::Impl::factor(const Eigen::SparseMatrix<double>& Lambda,
+                                  MarginalsOrdering ordering) {
+  const auto t0 = std::chrono::steady_clock::now();
+  common.print = 0;  // errors are reported by exception, not printed
+  common.supernodal = CHOLMOD_SUPERNODAL;
+  common.final_asis = 1;
+  std::vector<int> perm;
+  if (ordering == MarginalsOrdering::kBlockAmd) {
+    perm = block_amd_ordering(Lambda, block_dim, &common);
+    common.nmethods = 1;
+    common.method[0].ordering = CHOLMOD_GIVEN;
+    common.postorder = 1;
+  }
+  cholmod_sparse* A = lower_to_cholmod(Lambda, &common);
+  L = cholmod_analyze_p(A, perm.empty() ? nullptr : perm.data(), nullptr, 0, &common);
+  if (L == nullptr) {
+    cholmod_free_sparse(&A, &common);
+    throw ExactMarginalsError("ExactMarginals: CHOLMOD analyse failed (status " +
+                              std::to_string(common.status) + ")");
+  }
+  cholmod_factorize(A, L, &common);
+  cholmod_free_sparse(&A, &common);
+  if (common.status == CHOLMOD_NOT_POSDEF || L->minor < L->n) {
+    throw ExactMarginalsError("ExactMarginals: information matrix is not positive definite "
+                              "(non-positive pivot at permuted column " +
+                              std::to_string(L->minor) + " of " + std::to_string(n) + ")");
+  }
+  if (common.status < CHOLMOD_OK || !L->is_super || !L->is_ll) {
+    throw ExactMarginalsError("ExactMarginals: CHOLMOD factorisation failed (status " +
+                              std::to_string(common.status) + ")");
+  }
+  factor_ms = ms_since(t0);
+}
+
+void ExactMarginals::Impl::invert() {
+  const auto t0 = std::chrono::steady_clock::now();
+  const int nsuper = static_cast<int>(L->nsuper);
+  const int* Ls = rows();
+  const double* Lx = static_cast<const double*>(L->x);
+
+  col_super.assign(static_cast<size_t>(n), 0);
+  for (int s = 0; s < nsuper; ++s) {
+    for (int j = super()[s]; j < super()[s + 1]; ++j) col_super[static_cast<size_t>(j)] = s;
+    if (!std::is_sorted(Ls + pi()[s], Ls + pi()[s + 1])) {
+      throw ExactMarginalsError("ExactMarginals: CHOLMOD supernode row indices are not sorted");
+    }
+  }
+  const int* Perm = static_cast<const int*>(L->Perm);
+  inv_perm.assign(static_cast<size_t>(n), 0);
+  for (int k = 0; k < n; ++k) inv_perm[static_cast<size_t>(Perm[k])] = k;
+
+  sigma.assign(L->xsize, 0.0);
+  const int max_below = static_cast<int>(L->maxesize);
+  Eigen::MatrixXd srr_buffer(std::max(max_below, 1), std::max(max_below, 1));
+  std::vector<int> map(static_cast<size_t>(std::max(max_below, 1)));
+
+  for (int s = nsuper - 1; s >= 0; --s) {
+    const int k1 = super()[s];
+    const int nc = super()[s + 1] - k1;
+    const int nrows = pi()[s + 1] - pi()[s];
+    const int nr = nrows - nc;
+    const int* R = Ls + pi()[s] + nc;  // rows below the diagonal block, sorted
+    ConstMatMap Ls_block(Lx + px()[s], nrows, nc, Eigen::OuterStride<>(nrows));
+    MatMap S_block(sigma.data() + px()[s], nrows, nc, Eigen::OuterStride<>(nrows));
+    const auto L_JJ = Ls_block.topRows(nc).triangularView<Eigen::Lower>();
+
+    // U = L_JJ^-1 (lower triangular), needed by both formulas.
+    Eigen::MatrixXd W = Eigen::MatrixXd::Identity(nc, nc);
+    L_JJ.solveInPlace(W);  // W = L_JJ^-1
+
+    if (nr > 0) {
+      // Gather Sigma_RR (lower triangle suffices) from the later supernodes. The rows of R
+      // that are columns of one supernode t form a contiguous run; for that run the positions
+      // of R[q0..] in t's row list are found once by a merge and reused for every column.
+      auto S_RR = srr_buffer.topLeftCorner(nr, nr);
+      int q0 = 0;
+      while (q0 < nr) {
+        const int t = col_super[static_cast<size_t>(R[q0])];
+        const int t_first = super()[t];
+        const int t_end = super()[t + 1];
+        int q1 = q0;
+        while (q1 < nr && R[q1] < t_end) ++q1;
+        const int* t_rows = Ls + pi()[t];
+        const int t_nrows = pi()[t + 1] - pi()[t];
+        int pos = R[q0] - t_first;  // row R[q0] sits at its column offset in t's list
+        for (int p = q0; p < nr; ++p) {
+          // R[p] is in t's pattern (elimination-tree containment); guard against a bad factor.
+          while (pos < t_nrows && t_rows[pos] != R[p]) ++pos;
+          if (pos == t_nrows) {
+            throw ExactMarginalsError("ExactMarginals: supernode pattern containment violated");
+          }
+          map[static_cast<size_t>(p)] = pos;
+        }
+        const double* t_sigma = sigma.data() + px()[t];
+        for (int q = q0; q < q1; ++q) {
+          const double* col = t_sigma + static_cast<std::ptrdiff_t>(R[q] - t_first) * t_nrows;
+          for (int p = q0; p < nr; ++p) S_RR(p, q) = col[map[static_cast<size_t>(p)]];
+        }
+        q0 = q1;
+      }
+      const auto L_RJ = Ls_block.bottomRows(nr);
+      // Y = Sigma_RR L_RJ, then Sigma_RJ = -Y L_JJ^-1.
+      Eigen::MatrixXd Y = S_RR.selfadjointView<Eigen::Lower>() * L_RJ;
+      L_JJ.solveInPlace<Eigen::OnTheRight>(Y);  // Y <- Y L_JJ^-1 = -Sigma_RJ
+      S_block.bottomRows(nr) = -Y;
+      // Sigma_JJ = L_JJ^-T (L_JJ^-1 + L_RJ^T Y).
+      W.noalias() += L_RJ.transpose() * Y;
+    }
+    L_JJ.transpose().solveInPlace(W);
+    auto S_JJ = S_block.topRows(nc);
+    S_JJ = 0.5 * (W + W.transpose());
+  }
+  inversion_ms = ms_since(t0);
+}
+
+ExactMarginals::ExactMarginals(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+ExactMarginals::ExactMarginals(ExactMarginals&&) noexcept = default;
+ExactMarginals& ExactMarginals::operator=(ExactMarginals&&) noexcept = default;
+ExactMarginals::~ExactMarginals() = default;
+
+ExactMarginals ExactMarginals::compute(const Eigen::SparseMatrix<double>& Lambda, int block_dim,
+                                       MarginalsOrdering ordering) {
+  if (block_dim < 1) {
+    throw std::invalid_argument("ExactMarginals: block_dim " + std::to_string(block_dim) +
+                                " must be >= 1");
+  }
+  if (Lambda.rows() != Lambda.cols() || Lambda.rows() % block_dim != 0 || Lambda.rows() == 0) {
+    throw ExactMarginalsError("ExactMarginals: information matrix is " +
+                              std::to_string(Lambda.rows()) + "x" + std::to_string(Lambda.cols()) +
+                              ", expected square, non-empty, a multiple of block_dim " +
+                              std::to_string(block_dim));
+  }
+  auto impl = std::make_unique<Impl>();
+  impl->block_dim = block_dim;
+  impl->n = static_cast<int>(Lambda.rows());
+  if (Lambda.isCompressed()) {
+    impl->factor(Lambda, ordering);
+  } else {
+    Eigen::SparseMatrix<double> compressed = Lambda;
+    compressed.makeCompressed();
+    impl->factor(compressed, ordering);
+  }
+  impl->invert();
+  return ExactMarginals(std::move(impl));
+}
+
+int ExactMarginals::block_dim() const { return impl_->block_dim; }
+int ExactMarginals::num_blocks() const { return impl_->n / impl_->block_dim; }
+double ExactMarginals::factor_ms() const { return impl_->factor_ms; }
+double ExactMarginals::inversion_ms() const { return impl_->inversion_ms; }
+Eigen::Index ExactMarginals::factor_nnz() const {
+  return static_cast<Eigen::Index>(impl_->L->xsize);
+}
+
+double ExactMarginals::entry(Eigen::Index i, Eigen::Index j) const {
+  if (i < 0 || j < 0 || i >= impl_->n || j >= impl_->n) {
+    throw std::out_of_range("ExactMarginals::entry: index (" + std::to_string(i) + ", " +
+                            std::to_string(j) + ") outside " + std::to_string(impl_->n));
+  }
+  const std::ptrdiff_t off = impl_->offset(impl_->inv_perm[static_cast<size_t>(i)],
+                                           impl_->inv_perm[static_cast<size_t>(j)]);
+  if (off < 0) {
+    throw std::out_of_range("ExactMarginals::entry: (" + std::to_string(i) + ", " +
+                            std::to_string(j) + ") is not in the pattern of the factor");
+  }
+  return impl_->sigma[static_cast<size_t>(off)];
+}
+
+namespace {
+void check_block(int b, int num_blocks, const char* where) {
+  if (b < 0 || b >= num_blocks) {
+    throw std::out_of_range(std::string(where) + ": block " + std::to_string(b) + " outside [0, " +
+                            std::to_string(num_blocks) + ")");
+  }
+}
+}  // namespace
+
+bool ExactMarginals::in_pattern(int a, int b) const {
+  check_block(a, num_blocks(), "ExactMarginals::in_pattern");
+  check_block(b, num_blocks(), "ExactMarginals::in_pattern");
+  const int d = impl_->block_dim;
+  for (int r = 0; r < d; ++r) {
+    for (int c = 0; c < d; ++c) {
+      if (impl_->offset(impl_->inv_perm[static_cast<size_t>(a * d + r)],
+                        impl_->inv_perm[static_cast<size_t>(b * d + c)]) < 0) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+Eigen::MatrixXd ExactMarginals::marginal(int block) const {
+  check_block(block, num_blocks(), "ExactMarginals::marginal");
+  const int d = impl_->block_dim;
+  Eigen::MatrixXd S(d, d);
+  for (int c = 0; c < d; ++c) {
+    for (int r = c; r < d; ++r) {
+      const std::ptrdiff_t off =
+          impl_->offset(impl_->inv_perm[static_cast<size_t>(block * d + r)],
+                        impl_->inv_perm[static_cast<size_t>(block * d + c)]);
+      // A diagonal block of Lambda is in the pattern of L unless Lambda stores explicit
+      // structural zeros there; then the entry is not kept and is solved for below.
+      if (off < 0) return joint(block, block).topLeftCorner(d, d);
+      S(r, c) = S(c, r) = impl_->sigma[static_cast<size_t>(off)];
+    }
+  }
+  return S;
+}
+
+Eigen::MatrixXd ExactMarginals::joint(int a, int b) const {
+  check_block(a, num_blocks(), "ExactMarginals::joint");
+  check_block(b, num_blocks(), "ExactMarginals::joint");
+  const int d = impl_->block_dim;
+  Eigen::MatrixXd J(2 * d, 2 * d);
+  const bool direct = in_pattern(a, b) && in_pattern(a, a) && in_pattern(b, b);
+  if (direct) {
+    for (int c = 0; c < 2 * d; ++c) {
+      const int gc = (c < d ? a * d + c : b * d + c - d);
+      for (int r = 0; r < 2 * d; ++r) {
+        const int gr = (r < d ? a * d + r : b * d + r - d);
+        J(r, c) = impl_->sigma[static_cast<size_t>(impl_->offset(
+            impl_->inv_perm[static_cast<size_t>(gr)], impl_->inv_perm[static_cast<size_t>(gc)]))];
+      }
+    }
+    return J;
+  }
+  // Outside the pattern: solve the columns of blocks a and b exactly with the factor.
+  cholmod_common* c = &impl_->common;
+  cholmod_dense* E = cholmod_zeros(impl_->n, 2 * d, CHOLMOD_REAL, c);
+  if (E == nullptr) throw ExactMarginalsError("ExactMarginals::joint: CHOLMOD allocation failed");
+  auto* Ex = static_cast<double*>(E->x);
+  for (int k = 0; k < 2 * d; ++k) {
+    const int g = (k < d ? a * d + k : b * d + k - d);
+    Ex[static_cast<size_t>(k) * static_cast<size_t>(impl_->n) + static_cast<size_t>(g)] += 1.0;
+  }
+  cholmod_dense* X = cholmod_solve(CHOLMOD_A, impl_->L, E, c);
+  cholmod_free_dense(&E, c);
+  if (X == nullptr) throw ExactMarginalsError("ExactMarginals::joint: CHOLMOD solve failed");
+  const auto* Xx = static_cast<const double*>(X->x);
+  for (int k = 0; k < 2 * d; ++k) {
+    for (int r = 0; r < 2 * d; ++r) {
+      const int g = (r < d ? a * d + r : b * d + r - d);
+      J(r, k) = Xx[static_cast<size_t>(k) * static_cast<size_t>(impl_->n) + static_cast<size_t>(g)];
+    }
+  }
+  cholmod_free_dense(&X, c);
+  J = 0.5 * (J + J.transpose()).eval();
+  return J;
+}
+
+}  // namespace nav::core
