@@ -4,6 +4,8 @@
 
 #include "nav/core/geometry/rotation.h"
 
+#include <Eigen/Geometry>
+
 namespace nav::core {
 namespace {
 
