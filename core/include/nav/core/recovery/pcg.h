@@ -1,0 +1,132 @@
+#pragma once
+// Multi-right-hand-side preconditioned conjugate gradients for the state recovery of the
+// exactly sparse delayed-state filter (Eustice et al., RSS 2005, sec. III-A): the mean and the
+// robot's covariance column are solved together, Λ [μ, Σ_{*r}] = [η, E_r].
+//
+// Algorithm: textbook PCG (Hestenes & Stiefel 1952; Saad, "Iterative Methods for Sparse Linear
+// Systems", 2nd ed., Alg. 9.1) run on every column at once so that the expensive part, the
+// product Λ P, is one sparse-matrix times thin-dense-matrix product per iteration. Each column
+// keeps its own step α_c and direction update β_c, so the columns converge independently
+// (identical to running the columns one by one); a column that has met the tolerance is frozen.
+//
+// Preconditioner: block Jacobi, M = blockdiag(Λ_00, Λ_11, ...), whose blocks are inverted once
+// per snapshot of Λ (BlockJacobiPreconditioner::factor). The filter's blocks are the natural
+// units of Λ (one state each), and block Jacobi makes CG invariant to the very different scales
+// of positions, angles and velocities inside a state.
+//
+// Residuals: at the end of a solve the TRUE residual R = B - A X is recomputed with one extra
+// product (unless disabled), because the covariance bounds (bounds.h) certify their error from
+// it and the recurrence residual drifts from the true one in floating point.
+//
+// Allocation: the caller owns a PcgWorkspace; it only reallocates when the problem size grows.
+// Thread contract: none of these types are shared; the recovery thread owns them.
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include <vector>
+
+#include "nav/core/filter/information_matrix.h"
+#include "nav/core/status.h"
+
+namespace nav::core {
+
+/// Row-major compressed sparse matrix: the snapshot format of Λ for the recovery thread.
+using CsrMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+
+/// A symmetric positive definite linear operator Y = A X.
+class SpdOperator {
+ public:
+  virtual ~SpdOperator() = default;
+  virtual Eigen::Index dim() const = 0;
+  /// Y = A X; X and Y are dim() x m (any m >= 1) and do not alias.
+  virtual void multiply(const Eigen::Ref<const Eigen::MatrixXd>& X,
+                        Eigen::Ref<Eigen::MatrixXd> Y) const = 0;
+};
+
+/// Λ as a compressed row-major snapshot (both triangles stored). Holds a reference: the
+/// matrix must outlive the operator.
+class CsrOperator final : public SpdOperator {
+ public:
+  explicit CsrOperator(const CsrMatrix& lambda) : lambda_(lambda) {}
+  Eigen::Index dim() const override { return lambda_.rows(); }
+  void multiply(const Eigen::Ref<const Eigen::MatrixXd>& X,
+                Eigen::Ref<Eigen::MatrixXd> Y) const override;
+
+ private:
+  const CsrMatrix& lambda_;
+};
+
+/// Λ as the filter's block-sparse InformationMatrix (InformationMatrix::multiply). Holds a
+/// reference: the matrix must outlive the operator and must not change during a solve.
+class InformationOperator final : public SpdOperator {
+ public:
+  explicit InformationOperator(const InformationMatrix& lambda) : lambda_(lambda) {}
+  Eigen::Index dim() const override { return lambda_.dim(); }
+  void multiply(const Eigen::Ref<const Eigen::MatrixXd>& X,
+                Eigen::Ref<Eigen::MatrixXd> Y) const override {
+    lambda_.multiply(X, Y);
+  }
+
+ private:
+  const InformationMatrix& lambda_;
+};
+
+/// Block-Jacobi preconditioner: Z = M^-1 R with M the block diagonal of Λ.
+class BlockJacobiPreconditioner {
+ public:
+  /// Inverts the diagonal blocks of a CSR snapshot. kNotPositiveDefinite names the first block
+  /// whose Cholesky factorisation fails; kInvalidArgument if the size is not a multiple of
+  /// block_dim. On error the preconditioner is left empty.
+  Status factor(const CsrMatrix& lambda, int block_dim);
+  /// Same from the filter's block matrix (diagonal_block(i)).
+  Status factor(const InformationMatrix& lambda);
+
+  int block_dim() const { return block_dim_; }
+  int num_blocks() const { return static_cast<int>(inverse_blocks_.size()); }
+  Eigen::Index dim() const { return Eigen::Index{num_blocks()} * block_dim_; }
+
+  /// Z = M^-1 R (R and Z are dim() x m).
+  void apply(const Eigen::Ref<const Eigen::MatrixXd>& R, Eigen::Ref<Eigen::MatrixXd> Z) const;
+
+ private:
+  Status invert_block(int index, const Eigen::Ref<const Eigen::MatrixXd>& block);
+
+  int block_dim_ = 0;
+  std::vector<Eigen::MatrixXd> inverse_blocks_;
+};
+
+struct PcgOptions {
+  /// Maximum iterations (>= 0). 0 only evaluates the residual of the initial guess.
+  int max_iterations = 100;
+  /// A column stops when ‖b_c - A x_c‖ <= relative_tolerance ‖b_c‖ (>= 0). 0 runs exactly
+  /// max_iterations on every column (the fixed-budget real-time mode).
+  double relative_tolerance = 0.0;
+  /// Recompute R = B - A X with one extra product at the end (recommended; the bounds rely on
+  /// it). When false the recurrence residual is reported.
+  bool recompute_true_residual = true;
+
+  Status validate() const;
+};
+
+struct PcgSummary {
+  Status status;                       ///< kNumericalFailure if p^T A p <= 0 in some column
+  int iterations = 0;                  ///< iterations run (the slowest column)
+  Eigen::VectorXd residual_norm;       ///< ‖b_c - A x_c‖_2 per column at exit
+  Eigen::VectorXd relative_residual;   ///< residual_norm / ‖b_c‖ (‖r‖ when b_c = 0)
+  double max_relative_residual = 0.0;  ///< max over columns
+  bool converged = false;              ///< every column met relative_tolerance
+};
+
+/// Scratch matrices of a solve (reused between solves; grows, never shrinks).
+struct PcgWorkspace {
+  Eigen::MatrixXd R, Z, P, Q;
+};
+
+/// Solves A X = B by multi-RHS PCG. X holds the warm start on entry and the solution on exit.
+/// A, M, B and X must agree in size (kInvalidArgument otherwise, X untouched).
+PcgSummary solve_pcg(const SpdOperator& A, const BlockJacobiPreconditioner& M,
+                     const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::Ref<Eigen::MatrixXd> X,
+                     const PcgOptions& options, PcgWorkspace& workspace);
+
+}  // namespace nav::core

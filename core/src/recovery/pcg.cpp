@@ -1,0 +1,215 @@
+// Multi-RHS preconditioned CG and its block-Jacobi preconditioner (see recovery/pcg.h).
+#include "nav/core/recovery/pcg.h"
+
+#include <Eigen/Cholesky>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace nav::core {
+namespace {
+
+/// Makes `m` at least rows x cols (capacity grows by 1.5x so a growing filter reallocates
+/// O(log n) times) and returns its top-left rows x cols block.
+Eigen::Block<Eigen::MatrixXd> scratch(Eigen::MatrixXd& m, Eigen::Index rows, Eigen::Index cols) {
+  if (m.rows() < rows || m.cols() < cols) {
+    const Eigen::Index new_rows = std::max(rows, m.rows() + m.rows() / 2);
+    m.resize(new_rows, std::max(cols, m.cols()));
+  }
+  return m.topLeftCorner(rows, cols);
+}
+
+double relative(double residual, double rhs) { return rhs > 0.0 ? residual / rhs : residual; }
+
+}  // namespace
+
+void CsrOperator::multiply(const Eigen::Ref<const Eigen::MatrixXd>& X,
+                           Eigen::Ref<Eigen::MatrixXd> Y) const {
+  // Row-major sparse times column-major dense: one pass over Λ per column keeps the row's
+  // indices and values in L1 while the column of X is gathered.
+  const Eigen::Index n = lambda_.rows();
+  const int* outer = lambda_.outerIndexPtr();
+  const int* inner = lambda_.innerIndexPtr();
+  const double* values = lambda_.valuePtr();
+  for (Eigen::Index c = 0; c < X.cols(); ++c) {
+    const double* x = X.col(c).data();
+    double* y = Y.col(c).data();
+    for (Eigen::Index i = 0; i < n; ++i) {
+      double sum = 0.0;
+      for (int k = outer[i]; k < outer[i + 1]; ++k) sum += values[k] * x[inner[k]];
+      y[i] = sum;
+    }
+  }
+}
+
+Status BlockJacobiPreconditioner::invert_block(int index,
+                                               const Eigen::Ref<const Eigen::MatrixXd>& block) {
+  Eigen::LLT<Eigen::MatrixXd> llt(0.5 * (block + block.transpose()));
+  if (llt.info() != Eigen::Success) {
+    inverse_blocks_.clear();
+    return Status::Error(StatusCode::kNotPositiveDefinite,
+                         "block-Jacobi preconditioner: diagonal block " + std::to_string(index) +
+                             " of the information matrix is not positive definite");
+  }
+  inverse_blocks_[static_cast<size_t>(index)] =
+      llt.solve(Eigen::MatrixXd::Identity(block.rows(), block.cols()));
+  return Status::Ok();
+}
+
+Status BlockJacobiPreconditioner::factor(const CsrMatrix& lambda, int block_dim) {
+  inverse_blocks_.clear();
+  if (block_dim < 1 || lambda.rows() != lambda.cols() || lambda.rows() % block_dim != 0) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "block-Jacobi preconditioner: matrix " + std::to_string(lambda.rows()) +
+                             "x" + std::to_string(lambda.cols()) +
+                             " is not square with a size multiple of block_dim " +
+                             std::to_string(block_dim));
+  }
+  block_dim_ = block_dim;
+  const int blocks = static_cast<int>(lambda.rows() / block_dim);
+  inverse_blocks_.resize(static_cast<size_t>(blocks));
+  Eigen::MatrixXd diagonal(block_dim, block_dim);
+  for (int b = 0; b < blocks; ++b) {
+    diagonal.setZero();
+    const Eigen::Index first = Eigen::Index{b} * block_dim;
+    for (Eigen::Index row = first; row < first + block_dim; ++row) {
+      for (CsrMatrix::InnerIterator it(lambda, row); it; ++it) {
+        if (it.col() >= first && it.col() < first + block_dim) {
+          diagonal(row - first, it.col() - first) = it.value();
+        }
+      }
+    }
+    if (Status s = invert_block(b, diagonal); !s.ok()) return s;
+  }
+  return Status::Ok();
+}
+
+Status BlockJacobiPreconditioner::factor(const InformationMatrix& lambda) {
+  inverse_blocks_.clear();
+  block_dim_ = lambda.block_dim();
+  inverse_blocks_.resize(static_cast<size_t>(lambda.num_blocks()));
+  for (int b = 0; b < lambda.num_blocks(); ++b) {
+    if (Status s = invert_block(b, lambda.diagonal_block(b)); !s.ok()) return s;
+  }
+  return Status::Ok();
+}
+
+void BlockJacobiPreconditioner::apply(const Eigen::Ref<const Eigen::MatrixXd>& R,
+                                      Eigen::Ref<Eigen::MatrixXd> Z) const {
+  for (int b = 0; b < num_blocks(); ++b) {
+    const Eigen::Index first = Eigen::Index{b} * block_dim_;
+    Z.middleRows(first, block_dim_).noalias() =
+        inverse_blocks_[static_cast<size_t>(b)] * R.middleRows(first, block_dim_);
+  }
+}
+
+Status PcgOptions::validate() const {
+  if (max_iterations < 0) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "PcgOptions.max_iterations must be >= 0, got " +
+                             std::to_string(max_iterations));
+  }
+  if (!(relative_tolerance >= 0.0) || !std::isfinite(relative_tolerance)) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "PcgOptions.relative_tolerance must be finite and >= 0, got " +
+                             std::to_string(relative_tolerance));
+  }
+  return Status::Ok();
+}
+
+PcgSummary solve_pcg(const SpdOperator& A, const BlockJacobiPreconditioner& M,
+                     const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::Ref<Eigen::MatrixXd> X,
+                     const PcgOptions& options, PcgWorkspace& workspace) {
+  PcgSummary summary;
+  summary.status = options.validate();
+  if (!summary.status.ok()) return summary;
+  const Eigen::Index n = A.dim();
+  const Eigen::Index m = B.cols();
+  if (M.dim() != n || B.rows() != n || X.rows() != n || X.cols() != m || m < 1) {
+    summary.status = Status::Error(
+        StatusCode::kInvalidArgument,
+        "solve_pcg: sizes disagree (operator " + std::to_string(n) + ", preconditioner " +
+            std::to_string(M.dim()) + ", B " + std::to_string(B.rows()) + "x" +
+            std::to_string(m) + ", X " + std::to_string(X.rows()) + "x" +
+            std::to_string(X.cols()) + ")");
+    return summary;
+  }
+  auto R = scratch(workspace.R, n, m);
+  auto Z = scratch(workspace.Z, n, m);
+  auto P = scratch(workspace.P, n, m);
+  auto Q = scratch(workspace.Q, n, m);
+
+  // R = B - A X (warm start), Z = M^-1 R, P = Z.
+  A.multiply(X, Q);
+  R = B - Q;
+  M.apply(R, Z);
+  P = Z;
+
+  const Eigen::VectorXd rhs_norm = B.colwise().norm().transpose();
+  Eigen::VectorXd rz = (R.cwiseProduct(Z)).colwise().sum().transpose();
+  std::vector<bool> active(static_cast<size_t>(m), true);
+  auto column_done = [&](Eigen::Index c) {
+    return options.relative_tolerance > 0.0 &&
+           R.col(c).norm() <= options.relative_tolerance * rhs_norm[c];
+  };
+  int active_count = 0;
+  for (Eigen::Index c = 0; c < m; ++c) {
+    active[static_cast<size_t>(c)] = !column_done(c);
+    active_count += active[static_cast<size_t>(c)] ? 1 : 0;
+  }
+
+  int iteration = 0;
+  for (; iteration < options.max_iterations && active_count > 0; ++iteration) {
+    A.multiply(P, Q);
+    for (Eigen::Index c = 0; c < m; ++c) {
+      if (!active[static_cast<size_t>(c)]) continue;
+      const double pq = P.col(c).dot(Q.col(c));
+      if (!(pq > 0.0)) {
+        // Breakdown: either the column is already exact (p = 0) or A is not SPD.
+        if (P.col(c).squaredNorm() > 0.0 && summary.status.ok()) {
+          summary.status = Status::Error(
+              StatusCode::kNumericalFailure,
+              "solve_pcg: p^T A p = " + std::to_string(pq) + " <= 0 in column " +
+                  std::to_string(c) + " at iteration " + std::to_string(iteration) +
+                  " (operator not positive definite?)");
+        }
+        active[static_cast<size_t>(c)] = false;
+        --active_count;
+        continue;
+      }
+      const double alpha = rz[c] / pq;
+      X.col(c) += alpha * P.col(c);
+      R.col(c) -= alpha * Q.col(c);
+      if (column_done(c)) {
+        active[static_cast<size_t>(c)] = false;
+        --active_count;
+      }
+    }
+    M.apply(R, Z);
+    for (Eigen::Index c = 0; c < m; ++c) {
+      if (!active[static_cast<size_t>(c)]) continue;
+      const double rz_new = R.col(c).dot(Z.col(c));
+      const double beta = rz[c] > 0.0 ? rz_new / rz[c] : 0.0;
+      rz[c] = rz_new;
+      P.col(c) = Z.col(c) + beta * P.col(c);
+    }
+  }
+  summary.iterations = iteration;
+
+  if (options.recompute_true_residual) {
+    A.multiply(X, Q);
+    R = B - Q;
+  }
+  summary.residual_norm = R.colwise().norm().transpose();
+  summary.relative_residual.resize(m);
+  for (Eigen::Index c = 0; c < m; ++c) {
+    summary.relative_residual[c] = relative(summary.residual_norm[c], rhs_norm[c]);
+  }
+  summary.max_relative_residual = summary.relative_residual.maxCoeff();
+  summary.converged = options.relative_tolerance > 0.0 &&
+                      summary.max_relative_residual <= options.relative_tolerance;
+  return summary;
+}
+
+}  // namespace nav::core
