@@ -83,10 +83,9 @@ struct AltimeterDecoder::Impl {
 
   bool on_line(std::string_view line, const HostTime& received, std::vector<AltimeterRecord>& out) {
     std::string_view text = ascii::trim(line);
-    const std::string_view prefix =
-        format.protocol == AltimeterProtocol::kImpactSubseaIsa500 ? format.prefix : "";
-    const std::string_view suffix =
-        format.protocol == AltimeterProtocol::kImpactSubseaIsa500 ? format.suffix : "m";
+    const bool isa500 = format.protocol == AltimeterProtocol::kImpactSubseaIsa500;
+    const std::string_view prefix = isa500 ? std::string_view(format.prefix) : "";
+    const std::string_view suffix = isa500 ? std::string_view(format.suffix) : "m";
     if (!strip_prefix(text, prefix) || !strip_suffix_nocase(text, suffix)) {
       ++stats.malformed;
       return false;
