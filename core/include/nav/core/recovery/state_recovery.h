@@ -1,0 +1,130 @@
+#pragma once
+// State recovery for the exactly sparse delayed-state filter (Eustice et al., RSS 2005,
+// sec. III-A): from a snapshot of the information form (Λ, η) recover the mean μ and the
+// robot's covariance column Σ_{*r} by solving
+//     Λ [μ, Σ_{*r}] = [η, E_r]        (n x (1 + block_dim) right-hand sides)
+// with multi-RHS PCG (pcg.h), warm-started from the previous step.
+//
+// Layout: the robot is block 0 (the ESDF convention, filter/esdf.h); the solution matrix is
+// X = [μ | Σ_{*r}], so rows of block i hold μ_i and Σ_{i r}.
+//
+// Warm-start extension when the filter predicts (x_{t+1} = f(x_t) + w, F = ∂f/∂x_t, w ~ N(0,Q)).
+// These rules are EXACT: if X was the exact solution for the old (Λ, η), the extended X is the
+// exact solution for the predicted (Λ', η') (tested in state_recovery_test.cpp):
+//   * new robot rows (block 0):   μ'_r = f(μ_t),  Σ'_{rr} = F Σ_tt Fᵀ + Q
+//   * every other state i:        μ'_i = μ_i,     Σ'_{i r} = Σ_{i t} Fᵀ      (Cov(x_i, f(x_t)+w))
+//   * the old robot, when kept as a delayed state (appended as the last block):
+//                                 μ'_k = μ_t,     Σ'_{k r} = Σ_tt Fᵀ
+// Inserting a delayed copy of the robot without a prediction (x_k = x_r) is the special case
+// F = I, Q = 0 of the last rule: its rows equal the robot's (extend_for_augmentation).
+// Σ_tt is symmetrised before use (a truncated CG column is not exactly symmetric).
+//
+// Modes: a fixed number of PCG iterations per step (the paper's real-time mode; the result is
+// approximate, the residual says how much), PCG to a relative-residual tolerance, and a direct
+// CHOLMOD solve (reference). Every solve reports the relative residual of each column and the
+// Frobenius norm of the true residual of the covariance columns, which the covariance bounds
+// (bounds.h) turn into a certified error bound.
+//
+// Not thread-safe: owned by the recovery thread. No clocks (time it from the caller).
+
+#include <Eigen/Core>
+
+#include "nav/core/filter/information_matrix.h"
+#include "nav/core/recovery/pcg.h"
+#include "nav/core/status.h"
+
+namespace nav::core {
+
+enum class RecoveryMode {
+  kFixedIterations,  ///< exactly `iterations_per_step` PCG iterations (real-time mode)
+  kTolerance,        ///< PCG until every column meets `relative_tolerance` (or max_iterations)
+  kDirect,           ///< CHOLMOD supernodal Cholesky of the snapshot (reference; O(fill))
+};
+
+const char* to_string(RecoveryMode mode);
+
+struct StateRecoveryOptions {
+  RecoveryMode mode = RecoveryMode::kFixedIterations;
+  /// kFixedIterations: PCG iterations per step, >= 0 (0 = only re-evaluate the warm start).
+  int iterations_per_step = 5;
+  /// kTolerance: stop when ‖b_c - Λ x_c‖ <= relative_tolerance ‖b_c‖ for every column, > 0.
+  double relative_tolerance = 1e-10;
+  /// kTolerance: iteration cap, >= 1 (the summary says if it was hit).
+  int max_iterations = 5000;
+
+  Status validate() const;
+};
+
+struct RecoveryResult {
+  Status status;
+  RecoveryMode mode = RecoveryMode::kFixedIterations;
+  int iterations = 0;                    ///< PCG iterations (0 for kDirect)
+  double mean_relative_residual = 0.0;   ///< ‖η - Λμ‖ / ‖η‖
+  double column_relative_residual = 0.0; ///< max_c ‖e_c - Λσ_c‖ / ‖e_c‖ over the Σ_{*r} columns
+  double max_relative_residual = 0.0;    ///< max of the two above
+  /// ‖E_r - Λ Σ̂_{*r}‖_F, the true residual of the covariance columns (input of the certified
+  /// error bound in bounds.h).
+  double column_residual_frobenius = 0.0;
+};
+
+class StateRecovery {
+ public:
+  /// block_dim in [1, 12]; options must validate (std::invalid_argument otherwise: a
+  /// configuration error caught at start-up).
+  explicit StateRecovery(int block_dim, StateRecoveryOptions options = {});
+
+  int block_dim() const { return block_dim_; }
+  int num_blocks() const { return static_cast<int>(solution_.rows() / block_dim_); }
+  const StateRecoveryOptions& options() const { return options_; }
+  Status set_options(const StateRecoveryOptions& options);
+
+  /// Starts with one state (the robot): μ = x0, Σ_{*r} = P0 (exact for a filter initialised
+  /// with the prior (x0, P0)).
+  Status initialize(const Eigen::VectorXd& x0, const Eigen::MatrixXd& P0);
+  /// Replaces the warm start, n x (1 + block_dim) with n a multiple of block_dim.
+  Status set_solution(const Eigen::MatrixXd& X);
+
+  /// Extends the warm start across a prediction (rules in the file comment). robot_mean is
+  /// f(μ_t), the filter's new robot mean. When keep_current, the old robot becomes the last
+  /// block (`kept_block` must equal the old num_blocks()).
+  Status extend_for_prediction(const Eigen::MatrixXd& F, const Eigen::MatrixXd& Q,
+                               const Eigen::VectorXd& robot_mean, bool keep_current,
+                               int kept_block);
+  /// Appends a delayed copy of the robot (no prediction): new rows equal the robot's.
+  Status extend_for_augmentation(int new_block);
+
+  /// Solves on a CSR snapshot of Λ (both triangles) and η, from the current warm start. On an
+  /// error the warm start is left as it was (CG) and status says why.
+  RecoveryResult solve(const CsrMatrix& lambda, const Eigen::VectorXd& eta);
+  /// Same on the filter's block matrix directly (InformationMatrix::multiply). kDirect
+  /// converts to a sparse matrix first.
+  RecoveryResult solve(const InformationMatrix& lambda, const Eigen::VectorXd& eta);
+
+  /// [μ | Σ_{*r}], n x (1 + block_dim).
+  const Eigen::MatrixXd& solution() const { return solution_; }
+  Eigen::VectorXd mean() const { return solution_.col(0); }
+  /// Σ_{*r}, n x block_dim.
+  Eigen::MatrixXd robot_column() const { return solution_.rightCols(block_dim_); }
+  /// Σ_rr, symmetrised.
+  Eigen::MatrixXd robot_covariance() const;
+  /// Σ_{i r} (rows of block i of the robot column), block_dim x block_dim.
+  Eigen::MatrixXd cross_covariance(int block) const;
+
+ private:
+  RecoveryResult solve_with(const SpdOperator& A, const Eigen::VectorXd& eta);
+  RecoveryResult solve_direct(const Eigen::SparseMatrix<double>& lambda,
+                              const Eigen::VectorXd& eta);
+  Status check_snapshot(Eigen::Index n, Eigen::Index eta_size) const;
+  void fill_rhs(const Eigen::VectorXd& eta);
+  void finish(RecoveryResult& result, const Eigen::VectorXd& residual_norm,
+              const Eigen::VectorXd& rhs_norm) const;
+
+  int block_dim_;
+  StateRecoveryOptions options_;
+  Eigen::MatrixXd solution_;
+  Eigen::MatrixXd rhs_;
+  BlockJacobiPreconditioner preconditioner_;
+  PcgWorkspace workspace_;
+};
+
+}  // namespace nav::core

@@ -1,0 +1,262 @@
+// Mean and robot-column recovery with warm start (see recovery/state_recovery.h).
+#include "nav/core/recovery/state_recovery.h"
+
+#include <Eigen/CholmodSupport>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace nav::core {
+namespace {
+
+std::string shape(const Eigen::MatrixXd& m) {
+  return std::to_string(m.rows()) + "x" + std::to_string(m.cols());
+}
+
+}  // namespace
+
+const char* to_string(RecoveryMode mode) {
+  switch (mode) {
+    case RecoveryMode::kFixedIterations: return "fixed-iterations";
+    case RecoveryMode::kTolerance: return "tolerance";
+    case RecoveryMode::kDirect: return "direct";
+  }
+  return "unknown";
+}
+
+Status StateRecoveryOptions::validate() const {
+  if (iterations_per_step < 0) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "StateRecoveryOptions.iterations_per_step must be >= 0, got " +
+                             std::to_string(iterations_per_step));
+  }
+  if (!(relative_tolerance > 0.0) || !std::isfinite(relative_tolerance)) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "StateRecoveryOptions.relative_tolerance must be finite and > 0, got " +
+                             std::to_string(relative_tolerance));
+  }
+  if (max_iterations < 1) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "StateRecoveryOptions.max_iterations must be >= 1, got " +
+                             std::to_string(max_iterations));
+  }
+  return Status::Ok();
+}
+
+StateRecovery::StateRecovery(int block_dim, StateRecoveryOptions options)
+    : block_dim_(block_dim), options_(options) {
+  if (block_dim < 1 || block_dim > InformationMatrix::kMaxBlockDim) {
+    throw std::invalid_argument("StateRecovery: block_dim must be in [1, 12], got " +
+                                std::to_string(block_dim));
+  }
+  if (Status s = options.validate(); !s.ok()) throw std::invalid_argument(s.message());
+  solution_.resize(0, 1 + block_dim_);
+}
+
+Status StateRecovery::set_options(const StateRecoveryOptions& options) {
+  if (Status s = options.validate(); !s.ok()) return s;
+  options_ = options;
+  return Status::Ok();
+}
+
+Status StateRecovery::initialize(const Eigen::VectorXd& x0, const Eigen::MatrixXd& P0) {
+  if (x0.size() != block_dim_ || P0.rows() != block_dim_ || P0.cols() != block_dim_) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "StateRecovery::initialize: expected x0 of " +
+                             std::to_string(block_dim_) + " and P0 square of that size, got " +
+                             std::to_string(x0.size()) + " and " + shape(P0));
+  }
+  solution_.resize(block_dim_, 1 + block_dim_);
+  solution_.col(0) = x0;
+  solution_.rightCols(block_dim_) = 0.5 * (P0 + P0.transpose());
+  return Status::Ok();
+}
+
+Status StateRecovery::set_solution(const Eigen::MatrixXd& X) {
+  if (X.cols() != 1 + block_dim_ || X.rows() % block_dim_ != 0 || X.rows() == 0) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "StateRecovery::set_solution: expected n x " +
+                             std::to_string(1 + block_dim_) + " with n a multiple of " +
+                             std::to_string(block_dim_) + ", got " + shape(X));
+  }
+  solution_ = X;
+  return Status::Ok();
+}
+
+Eigen::MatrixXd StateRecovery::robot_covariance() const {
+  const auto S = solution_.block(0, 1, block_dim_, block_dim_);
+  return 0.5 * (S + S.transpose());
+}
+
+Eigen::MatrixXd StateRecovery::cross_covariance(int block) const {
+  return solution_.block(Eigen::Index{block} * block_dim_, 1, block_dim_, block_dim_);
+}
+
+Status StateRecovery::extend_for_prediction(const Eigen::MatrixXd& F, const Eigen::MatrixXd& Q,
+                                            const Eigen::VectorXd& robot_mean,
+                                            bool keep_current, int kept_block) {
+  const int d = block_dim_;
+  if (num_blocks() == 0) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "StateRecovery::extend_for_prediction: not initialised");
+  }
+  if (F.rows() != d || F.cols() != d || Q.rows() != d || Q.cols() != d ||
+      robot_mean.size() != d) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "StateRecovery::extend_for_prediction: F " + shape(F) + ", Q " +
+                             shape(Q) + ", mean " + std::to_string(robot_mean.size()) +
+                             " must all be of block size " + std::to_string(d));
+  }
+  if (keep_current && kept_block != num_blocks()) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "StateRecovery::extend_for_prediction: the kept state must be appended "
+                         "as block " + std::to_string(num_blocks()) + ", got " +
+                             std::to_string(kept_block));
+  }
+  const Eigen::MatrixXd sigma_tt = robot_covariance();
+  const Eigen::VectorXd mean_t = solution_.col(0).head(d);
+  const Eigen::Index old_rows = solution_.rows();
+  if (keep_current) solution_.conservativeResize(old_rows + d, Eigen::NoChange);
+  auto column = solution_.rightCols(d);
+  // Every other state i: Σ'_{i r} = Σ_{i t} Fᵀ.
+  if (old_rows > d) {
+    column.middleRows(d, old_rows - d) = column.middleRows(d, old_rows - d) * F.transpose();
+  }
+  if (keep_current) {
+    solution_.block(old_rows, 0, d, 1) = mean_t;
+    column.bottomRows(d) = sigma_tt * F.transpose();
+  }
+  const Eigen::MatrixXd sigma_rr = F * sigma_tt * F.transpose() + Q;
+  column.topRows(d) = 0.5 * (sigma_rr + sigma_rr.transpose());
+  solution_.block(0, 0, d, 1) = robot_mean;
+  return Status::Ok();
+}
+
+Status StateRecovery::extend_for_augmentation(int new_block) {
+  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(block_dim_, block_dim_);
+  if (num_blocks() == 0) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "StateRecovery::extend_for_augmentation: not initialised");
+  }
+  return extend_for_prediction(I, Eigen::MatrixXd::Zero(block_dim_, block_dim_),
+                               solution_.col(0).head(block_dim_), true, new_block);
+}
+
+Status StateRecovery::check_snapshot(Eigen::Index n, Eigen::Index eta_size) const {
+  if (n != solution_.rows() || eta_size != n) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "StateRecovery::solve: snapshot has " + std::to_string(n) +
+                             " rows and eta " + std::to_string(eta_size) +
+                             " but the warm start has " + std::to_string(solution_.rows()) +
+                             " (extend it on every prediction/augmentation)");
+  }
+  return Status::Ok();
+}
+
+void StateRecovery::fill_rhs(const Eigen::VectorXd& eta) {
+  const Eigen::Index n = solution_.rows();
+  rhs_.setZero(n, 1 + block_dim_);
+  rhs_.col(0) = eta;
+  rhs_.block(0, 1, block_dim_, block_dim_).setIdentity();
+}
+
+void StateRecovery::finish(RecoveryResult& result, const Eigen::VectorXd& residual_norm,
+                           const Eigen::VectorXd& rhs_norm) const {
+  result.mean_relative_residual =
+      rhs_norm[0] > 0.0 ? residual_norm[0] / rhs_norm[0] : residual_norm[0];
+  result.column_relative_residual = 0.0;
+  double sum_sq = 0.0;
+  for (int c = 1; c <= block_dim_; ++c) {
+    result.column_relative_residual =
+        std::max(result.column_relative_residual, residual_norm[c] / rhs_norm[c]);
+    sum_sq += residual_norm[c] * residual_norm[c];
+  }
+  result.column_residual_frobenius = std::sqrt(sum_sq);
+  result.max_relative_residual =
+      std::max(result.mean_relative_residual, result.column_relative_residual);
+}
+
+RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Eigen::VectorXd& eta) {
+  RecoveryResult result;
+  result.mode = options_.mode;
+  fill_rhs(eta);
+  PcgOptions pcg;
+  if (options_.mode == RecoveryMode::kFixedIterations) {
+    pcg.max_iterations = options_.iterations_per_step;
+    pcg.relative_tolerance = 0.0;
+  } else {
+    pcg.max_iterations = options_.max_iterations;
+    pcg.relative_tolerance = options_.relative_tolerance;
+  }
+  const PcgSummary summary =
+      solve_pcg(A, preconditioner_, rhs_, solution_, pcg, workspace_);
+  result.status = summary.status;
+  result.iterations = summary.iterations;
+  if (summary.residual_norm.size() == rhs_.cols()) {
+    finish(result, summary.residual_norm, rhs_.colwise().norm().transpose());
+  }
+  if (result.status.ok() && options_.mode == RecoveryMode::kTolerance && !summary.converged) {
+    result.status = Status::Error(
+        StatusCode::kNumericalFailure,
+        "StateRecovery: PCG did not reach relative residual " +
+            std::to_string(options_.relative_tolerance) + " in " +
+            std::to_string(summary.iterations) + " iterations (reached " +
+            std::to_string(summary.max_relative_residual) + ")");
+  }
+  return result;
+}
+
+RecoveryResult StateRecovery::solve_direct(const Eigen::SparseMatrix<double>& lambda,
+                                           const Eigen::VectorXd& eta) {
+  RecoveryResult result;
+  result.mode = RecoveryMode::kDirect;
+  fill_rhs(eta);
+  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt(lambda);
+  if (llt.info() != Eigen::Success) {
+    result.status = Status::Error(StatusCode::kNotPositiveDefinite,
+                                  "StateRecovery: CHOLMOD could not factor the " +
+                                      std::to_string(lambda.rows()) +
+                                      "-dimensional information matrix (not SPD)");
+    return result;
+  }
+  solution_ = llt.solve(rhs_);
+  const Eigen::MatrixXd residual = rhs_ - lambda * solution_;
+  finish(result, residual.colwise().norm().transpose(), rhs_.colwise().norm().transpose());
+  return result;
+}
+
+RecoveryResult StateRecovery::solve(const CsrMatrix& lambda, const Eigen::VectorXd& eta) {
+  RecoveryResult result;
+  result.mode = options_.mode;
+  result.status = check_snapshot(lambda.rows(), eta.size());
+  if (!result.status.ok()) return result;
+  if (options_.mode == RecoveryMode::kDirect) {
+    // A symmetric CSR matrix is its own transpose, i.e. the same arrays read as CSC.
+    return solve_direct(Eigen::SparseMatrix<double>(lambda), eta);
+  }
+  result.status = preconditioner_.factor(lambda, block_dim_);
+  if (!result.status.ok()) return result;
+  return solve_with(CsrOperator(lambda), eta);
+}
+
+RecoveryResult StateRecovery::solve(const InformationMatrix& lambda, const Eigen::VectorXd& eta) {
+  RecoveryResult result;
+  result.mode = options_.mode;
+  if (lambda.block_dim() != block_dim_) {
+    result.status = Status::Error(StatusCode::kInvalidArgument,
+                                  "StateRecovery::solve: information matrix block size " +
+                                      std::to_string(lambda.block_dim()) + " != " +
+                                      std::to_string(block_dim_));
+    return result;
+  }
+  result.status = check_snapshot(lambda.dim(), eta.size());
+  if (!result.status.ok()) return result;
+  if (options_.mode == RecoveryMode::kDirect) return solve_direct(lambda.to_sparse(), eta);
+  result.status = preconditioner_.factor(lambda);
+  if (!result.status.ok()) return result;
+  return solve_with(InformationOperator(lambda), eta);
+}
+
+}  // namespace nav::core
