@@ -164,6 +164,15 @@ TEST(AttitudeModels, ResidualAcrossPiIsWrapped) {
   EXPECT_EQ(d[0], 10.0);
 }
 
+TEST(AttitudeModels, AngleMaskListsAngleRows) {
+  const AngleMask rel = angle_mask(RelativePose6Model{});
+  for (int r = 0; r < 6; ++r) EXPECT_EQ(rel[r], r >= 3) << r;
+  const AngleMask cam = angle_mask(CameraRelativePoseModel{});
+  for (int r = 0; r < 6; ++r) EXPECT_EQ(cam[r], r < 5) << r;
+  const AngleMask dvl = angle_mask(DvlVelocityModel{});
+  for (int r = 0; r < 6; ++r) EXPECT_FALSE(dvl[r]) << r;
+}
+
 TEST(DepthModel, LeverArmByHand) {
   DepthModel depth;
   depth.p_body_sensor_m = Vec3(1.0, 0.0, 0.2);

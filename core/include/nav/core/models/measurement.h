@@ -19,6 +19,7 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <cstddef>
 
 namespace nav::core {
 
@@ -39,6 +40,11 @@ struct AngleMask {
 template <class Model>
 void wrap_angle_rows(const Model& model, MeasVec& r);
 
+/// The model's is_angle() rows as a mask (rows >= dim() are false), e.g. to store with a
+/// queued measurement.
+template <class Model>
+AngleMask angle_mask(const Model& model);
+
 /// Throws std::invalid_argument("<model>: state block has N elements, expected 6 or 12")
 /// unless x.size() is 6 or 12 (or exactly 12 when `need_velocity`).
 void require_block_size(Eigen::Index size, bool need_velocity, const char* model);
@@ -54,6 +60,15 @@ void wrap_angle_rows(const Model& model, MeasVec& r) {
   for (int row = 0; row < model.dim(); ++row) {
     if (model.is_angle(row)) r[row] = wrap_angle(r[row]);
   }
+}
+
+template <class Model>
+AngleMask angle_mask(const Model& model) {
+  AngleMask mask;
+  for (int row = 0; row < model.dim(); ++row) {
+    mask.is_angle[static_cast<std::size_t>(row)] = model.is_angle(row);
+  }
+  return mask;
 }
 
 }  // namespace nav::core
