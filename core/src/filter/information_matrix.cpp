@@ -47,12 +47,14 @@ void InformationMatrix::add_to_block(int i, int j, const Eigen::Ref<const Eigen:
   assert(m.rows() == block_dim_ && m.cols() == block_dim_);
   if (i == j) {
     rows_[static_cast<size_t>(i)].diagonal += 0.5 * (m + m.transpose());
+    ++blocks_written_;
     return;
   }
   const bool existed = find_mutable(i, j) != nullptr;
   find_or_insert(i, j) += m;
   find_or_insert(j, i) += m.transpose();
   if (!existed) ++num_pairs_;
+  blocks_written_ += 2;
 }
 
 Eigen::MatrixXd InformationMatrix::block(int i, int j) const {
@@ -91,8 +93,10 @@ void InformationMatrix::clear_row(int i) {
       other.pop_back();
     }
     --num_pairs_;
+    blocks_written_ += 2;
   }
   row.off.clear();
+  ++blocks_written_;
   row.diagonal.setZero(block_dim_, block_dim_);
 }
 
@@ -100,8 +104,10 @@ void InformationMatrix::relabel(int row, int from, int to) {
   for (Entry& e : rows_[static_cast<size_t>(row)].off) {
     if (e.col == from) {
       e.col = to;
+      ++blocks_written_;
     } else if (e.col == to) {
       e.col = from;
+      ++blocks_written_;
     }
   }
 }
@@ -120,6 +126,7 @@ void InformationMatrix::swap_rows(int a, int b) {
   }
   for (int r : others) relabel(r, a, b);
   std::swap(rows_[static_cast<size_t>(a)], rows_[static_cast<size_t>(b)]);
+  blocks_written_ += 2;
   relabel(a, a, b);
   relabel(b, a, b);
 }

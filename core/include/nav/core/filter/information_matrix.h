@@ -79,6 +79,11 @@ class InformationMatrix {
   /// Number of stored off-diagonal block pairs {i, j}, i < j.
   size_t num_off_diagonal_pairs() const { return num_pairs_; }
 
+  /// Running count of stored blocks modified (written, created, removed or relabelled; the two
+  /// halves of a pair count as two). The filter differences it to report how many blocks an
+  /// operation touched (the constant-time property of the ESDF).
+  size_t blocks_written() const { return blocks_written_; }
+
  private:
   struct Entry {
     int col;
@@ -96,6 +101,7 @@ class InformationMatrix {
   int block_dim_;
   std::deque<Row> rows_;
   size_t num_pairs_ = 0;
+  size_t blocks_written_ = 0;
 };
 
 }  // namespace nav::core
