@@ -58,13 +58,22 @@ Pd0Decoder::Step Pd0Decoder::try_decode(const HostTime& received,
     ++stats_.malformed;
     return Step::kDropOne;
   }
-  if (avail < table_end) return Step::kNeedMore;
-  for (std::size_t k = 0; k < types; ++k) {  // reject false headers before waiting for N bytes
+  // Reject false headers (0x7F7F in garbage or inside data) before waiting for N bytes: RDI
+  // instruments write the fixed leader first, right after the offset table, and the other
+  // types in increasing offset order.
+  if (avail < table_end + 2) return Step::kNeedMore;
+  std::size_t previous = 0;
+  for (std::size_t k = 0; k < types; ++k) {
     const std::size_t offset = le16(p + kHeaderFixedBytes + 2 * k);
-    if (offset < table_end || offset + 2 > n) {
+    if ((k == 0 && offset != table_end) || offset <= previous || offset + 2 > n) {
       ++stats_.malformed;
       return Step::kDropOne;
     }
+    previous = offset;
+  }
+  if (le16(p + table_end) != kFixedLeaderId) {
+    ++stats_.malformed;
+    return Step::kDropOne;
   }
   const std::size_t total = n + kChecksumBytes;
   if (avail < total) return Step::kNeedMore;

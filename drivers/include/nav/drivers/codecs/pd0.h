@@ -112,7 +112,10 @@ struct Pd0DecoderOptions {
 
 /// Streaming PD0 decoder. Feed arbitrary chunks; complete, checksum-valid ensembles are
 /// appended to `out`. Resynchronisation: on a bad checksum or malformed header the decoder
-/// drops one byte and searches for the next 0x7F 0x7F. Every byte fed ends up either in an
+/// drops one byte and searches for the next 0x7F 0x7F. A header is believed (and the decoder
+/// waits for its N bytes) only when its offset table is consistent: first offset right after
+/// the table and pointing at the fixed leader ID 0x0000, offsets increasing and inside N, as
+/// every RDI instrument writes them; this keeps a 0x7F7F in garbage from stalling output. Every byte fed ends up either in an
 /// emitted ensemble, in `stats().dropped_bytes`, or (at most one incomplete ensemble) in
 /// `buffered_bytes()`. Not thread-safe; one decoder per stream.
 class Pd0Decoder {
