@@ -121,12 +121,8 @@ class Esdf {
 // ---- templates ----------------------------------------------------------------------------
 
 namespace detail {
-template <class Model>
-AngleMask angle_mask(const Model& model) {
-  AngleMask mask;
-  for (int r = 0; r < model.dim(); ++r) mask.is_angle[static_cast<std::size_t>(r)] = model.is_angle(r);
-  return mask;
-}
+/// Maps a model's exception to a Status (domain_error -> kOutOfRange, invalid_argument ->
+/// kInvalidArgument, anything else -> kNumericalFailure) naming `where`.
 Status model_error(const char* where, const std::exception& e);
 }  // namespace detail
 
@@ -140,7 +136,7 @@ Status Esdf::update(const Model& model, int block, const MeasVec& z, const MeasC
   } catch (const std::exception& e) {
     return detail::model_error("Esdf::update(model)", e);
   }
-  return update(block, z, h, H, R, detail::angle_mask(model));
+  return update(block, z, h, H, R, angle_mask(model));
 }
 
 template <class Model>
@@ -154,7 +150,7 @@ Status Esdf::update(const Model& model, int a, int b, const MeasVec& z, const Me
   } catch (const std::exception& e) {
     return detail::model_error("Esdf::update(model, a, b)", e);
   }
-  return update(a, b, z, h, H_a, H_b, R, detail::angle_mask(model));
+  return update(a, b, z, h, H_a, H_b, R, angle_mask(model));
 }
 
 }  // namespace nav::core
