@@ -41,6 +41,7 @@ class ExactMarginalsError : public std::runtime_error {
 /// Fill-reducing ordering used for the factorisation.
 enum class MarginalsOrdering {
   kBlockAmd,     ///< AMD on the block graph, expanded to scalars (default; fastest on pose graphs)
+  kBlockMetis,   ///< METIS nested dissection on the block graph, expanded to scalars
   kCholmodAuto,  ///< CHOLMOD's default choice (scalar AMD, METIS if AMD fills badly)
 };
 
