@@ -114,6 +114,8 @@ TEST(CandumpLog, StreamCountsEveryLine) {
   EXPECT_EQ(frames[0].id, 0x200u);
   EXPECT_EQ(frames[2].id, 0x202u);
   EXPECT_EQ(frames[4].time.realtime_us, 1'700'000'000'000'600);
+  EXPECT_EQ(frames[0].line_bytes, 46u);  // 45 characters and the newline
+  EXPECT_EQ(frames[4].line_bytes, 33u);  // the last line has no newline
   const DecodeStats& s = d.stats();
   EXPECT_EQ(s.records, 5u);
   EXPECT_EQ(s.malformed, 1u);

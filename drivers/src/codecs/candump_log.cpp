@@ -258,6 +258,7 @@ void CandumpLogDecoder::end_line(const HostTime& received, std::vector<CanLogFra
   switch (parse_candump_line(line_, f, has_time)) {
     case CandumpLineResult::kFrame:
       ++stats_.records;
+      f.line_bytes = static_cast<uint32_t>(line_.size() + 1);
       out.push_back(f);
       break;
     case CandumpLineResult::kBlank:
@@ -307,6 +308,7 @@ void CandumpLogDecoder::finish(const HostTime& received, std::vector<CanLogFrame
       const CandumpLineResult r = parse_candump_line(line_, f, has_time);
       if (r == CandumpLineResult::kFrame) {
         ++stats_.records;
+        f.line_bytes = static_cast<uint32_t>(line_.size());
         out.push_back(f);
       } else if (r != CandumpLineResult::kBlank) {
         ++(r == CandumpLineResult::kUnsupported ? stats_.unsupported : stats_.malformed);

@@ -34,6 +34,7 @@ struct CanLogFrame {
   std::array<uint8_t, 8> data{};
   HostTime time;                          ///< see the file comment
   std::array<char, 16> interface_name{};  ///< e.g. "can0", NUL-terminated (truncated to 15)
+  uint32_t line_bytes = 0;  ///< bytes of the log line incl. its newline (set by the decoder)
 
   std::span<const uint8_t> payload() const { return {data.data(), remote ? 0u : dlc}; }
 };
