@@ -281,10 +281,14 @@ std::string encode_pd6(const Pd6Record& record) {
   };
   if (const auto* a = std::get_if<Pd6Attitude>(&record.value)) {
     const double r2d = 180.0 / std::numbers::pi;
+    double heading_deg = 999.99;  // out of range: decodes empty
+    if (a->heading_rad) {  // wrapped to [0, 360) after rounding to the field's 0.01 deg
+      heading_deg = std::round(std::fmod(std::fmod(*a->heading_rad * r2d, 360.0) + 360.0, 360.0) * 100.0) / 100.0;
+      if (heading_deg >= 360.0) heading_deg = 0.0;
+    }
     std::snprintf(buf, sizeof buf, ":SA,%+06.2f,%+06.2f,%06.2f\r\n",
                   a->pitch_rad ? *a->pitch_rad * r2d : 99.99,
-                  a->roll_rad ? *a->roll_rad * r2d : 99.99,
-                  a->heading_rad ? *a->heading_rad * r2d : 999.99);
+                  a->roll_rad ? *a->roll_rad * r2d : 99.99, heading_deg);
   } else if (const auto* t = std::get_if<Pd6TimingScaling>(&record.value)) {
     char stamp[16] = "00000000000000";  // month 0: decodes as "no time"
     if (record.time.sensor_time_us) {
