@@ -84,7 +84,9 @@ bool parse_date_time(std::string_view date, std::string_view time, int64_t& us) 
       !parse_unsigned(time.substr(3, 2), 2, mi) || !parse_seconds(time.substr(6), sec_us)) {
     return false;
   }
-  if (mo < 1 || mo > 12 || d < 1 || d > 31 || h > 23 || mi > 59 || sec_us >= 61'000'000) {
+  // Before 1970 would give negative times, which the log format cannot write back.
+  if (y < 1970 || mo < 1 || mo > 12 || d < 1 || d > 31 || h > 23 || mi > 59 ||
+      sec_us >= 61'000'000) {
     return false;
   }
   us = ((days_from_civil(y, mo, d) * 24 + h) * 60 + mi) * 60'000'000 + sec_us;
