@@ -1,9 +1,8 @@
 // Tests of `navtool parse` (the built navtool binary, NAVTOOL_PATH): one JSON record per line
 // on stdout, {"summary": ...} on stderr, non-zero exit for an unknown format or missing file.
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
-
-#include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -34,12 +33,12 @@ std::string slurp(const std::filesystem::path& path) {
 
 /// Runs navtool with `args` (already shell-quoted), capturing stdout lines and stderr.
 RunResult run_navtool(const std::string& args) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("navtool_parse_test_" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("navtool_parse_test_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const auto out = dir / "stdout", err = dir / "stderr";
-  const std::string command = std::string("'") + NAVTOOL_PATH + "' " + args + " >'" +
-                              out.string() + "' 2>'" + err.string() + "'";
+  const std::string command = std::string("'") + NAVTOOL_PATH + "' " + args + " >'" + out.string() +
+                              "' 2>'" + err.string() + "'";
   const int status = std::system(command.c_str());
   RunResult result;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

@@ -24,7 +24,7 @@ const HostTime kHost{111, 222};
 /// A bottom-tracking ensemble with every field set to a known value.
 Pd0Ensemble sample_ensemble(uint32_t number = 70001) {
   Pd0Ensemble e;
-  e.ensemble_number = number;  // > 65535: exercises the MSB byte
+  e.ensemble_number = number;                 // > 65535: exercises the MSB byte
   e.time.sensor_time_us = 1495627373'900000;  // 2017-05-24T12:02:53.90Z
   e.fixed.firmware_version = 51;
   e.fixed.firmware_revision = 41;
@@ -99,7 +99,8 @@ void expect_same(const Pd0Ensemble& a, const Pd0Ensemble& b) {
     const auto &x = *a.bottom_track, &y = *b.bottom_track;
     EXPECT_EQ(x.pings_per_ensemble, y.pings_per_ensemble);
     for (int i = 0; i < 4; ++i) {
-      expect_near_opt(x.velocity_mps[i], y.velocity_mps[i], tol, "bt velocity " + std::to_string(i));
+      expect_near_opt(x.velocity_mps[i], y.velocity_mps[i], tol,
+                      "bt velocity " + std::to_string(i));
       expect_near_opt(x.range_m[i], y.range_m[i], tol, "bt range " + std::to_string(i));
     }
     EXPECT_EQ(x.correlation, y.correlation);
@@ -136,18 +137,18 @@ TEST(Pd0Codec, EncodedEnsembleHasTheManualsLayout) {
   EXPECT_EQ(bytes[1], 0x7F);
   EXPECT_EQ(bytes[2] | (bytes[3] << 8), int(bytes.size()) - 2);
   EXPECT_EQ(bytes[5], 3);
-  EXPECT_EQ(bytes[6] | (bytes[7] << 8), 12);         // fixed leader right after the table
-  EXPECT_EQ(bytes[12 + 59], 0x80);                   // variable leader ID 0x0080
+  EXPECT_EQ(bytes[6] | (bytes[7] << 8), 12);  // fixed leader right after the table
+  EXPECT_EQ(bytes[12 + 59], 0x80);            // variable leader ID 0x0080
   const std::size_t v = 12 + 59;
   EXPECT_EQ(bytes[v + 2] | (bytes[v + 3] << 8), 70001 & 0xFFFF);
-  EXPECT_EQ(bytes[v + 11], 1);                       // ensemble MSB: 70001 = 1 * 65536 + 4465
+  EXPECT_EQ(bytes[v + 11], 1);                             // ensemble MSB: 70001 = 1 * 65536 + 4465
   EXPECT_EQ(bytes[v + 18] | (bytes[v + 19] << 8), 32118);  // heading 321.18 deg
-  EXPECT_EQ(bytes[v + 57], 20);                      // Y2K century
+  EXPECT_EQ(bytes[v + 57], 20);                            // Y2K century
   EXPECT_EQ(bytes[v + 58], 17);
   const std::size_t b = v + 65;
   EXPECT_EQ(bytes[b], 0x00);
-  EXPECT_EQ(bytes[b + 1], 0x06);                     // bottom track ID 0x0600
-  EXPECT_EQ(bytes[b + 77 + 2], 1);                   // 70001 cm = 1 * 65536 + 4465
+  EXPECT_EQ(bytes[b + 1], 0x06);                            // bottom track ID 0x0600
+  EXPECT_EQ(bytes[b + 77 + 2], 1);                          // 70001 cm = 1 * 65536 + 4465
   EXPECT_EQ(bytes[b + 30] | (bytes[b + 31] << 8), 0x8000);  // beam 4 invalid velocity
   uint32_t sum = 0;
   for (std::size_t i = 0; i + 2 < bytes.size(); ++i) sum += bytes[i];
@@ -212,6 +213,32 @@ void fix_checksum(std::vector<uint8_t>& bytes) {
 
 constexpr std::size_t kVariableAt = 12 + 59;  // in encode_pd0 output with bottom track
 
+TEST(Pd0Codec, UnknownDataTypesAreSkippedByTheOffsetTable) {
+  // Insert a WinRiver-style type 0x2022 of 10 bytes between the variable leader and the
+  // bottom track: the decoder must locate the bottom track through the offset table.
+  const Pd0Ensemble in = sample_ensemble();
+  const std::vector<uint8_t> plain = encode_pd0(in);
+  const std::size_t bottom_at = 12 + 59 + 65;
+  std::vector<uint8_t> bytes(plain.begin(), plain.begin() + 10);  // IDs .. 2 offsets
+  bytes[5] = 4;
+  const uint16_t offsets[4] = {14, 14 + 59, 14 + 59 + 65, 14 + 59 + 65 + 10};
+  for (uint16_t o : offsets) bytes.insert(bytes.end(), {uint8_t(o & 0xFF), uint8_t(o >> 8)});
+  bytes.erase(bytes.begin() + 6, bytes.begin() + 10);  // the encoder's old offsets
+  bytes.insert(bytes.end(), plain.begin() + 12, plain.begin() + std::ptrdiff_t(bottom_at));
+  bytes.insert(bytes.end(), {0x22, 0x20, 1, 2, 3, 4, 5, 6, 7, 8});
+  bytes.insert(bytes.end(), plain.begin() + std::ptrdiff_t(bottom_at), plain.end());
+  ASSERT_EQ(bytes.size(), plain.size() + 2 + 10);
+  bytes[2] = uint8_t((bytes.size() - 2) & 0xFF);
+  bytes[3] = uint8_t((bytes.size() - 2) >> 8);
+  fix_checksum(bytes);
+  Pd0Decoder decoder;
+  const auto out = decode_all(bytes, decoder);
+  ASSERT_EQ(out.size(), 1u);
+  expect_same(out[0], in);
+  EXPECT_EQ(out[0].skipped_type_ids, std::vector<uint16_t>{0x2022});
+  EXPECT_EQ(decoder.stats().unsupported, 0u);
+}
+
 TEST(Pd0Codec, RangeChecksRejectAbsurdValuesAndCountThem) {
   // Write raw values the instrument never produces and check each is rejected on its own.
   // Offsets are the manual's 1-based byte positions in the variable leader minus one.
@@ -221,22 +248,17 @@ TEST(Pd0Codec, RangeChecksRejectAbsurdValuesAndCountThem) {
     uint16_t raw;
     const char* what;
   };
-  const Case cases[] = {{18, 2, 36000, "heading 360.00 deg"},
-                        {20, 2, uint16_t(-9001), "pitch -90.01 deg"},
-                        {22, 2, 9001, "roll 90.01 deg"},
-                        {26, 2, 6000, "temperature 60 degC"},
-                        {24, 2, 41, "salinity 41 ppt"},
-                        {14, 2, 1399, "sound speed 1399 m/s"},
-                        {14, 2, 1601, "sound speed 1601 m/s"},
-                        {48, 2, uint16_t(-10001), "pressure -10.001 dbar"},
-                        {59, 1, 13, "Y2K RTC month 13"},
-                        {60, 1, 31, "Y2K RTC 31 June"},
-                        {62, 1, 60, "Y2K RTC minute 60"},
-                        {64, 1, 100, "Y2K RTC hundredths 100"}};
+  const Case cases[] = {
+      {18, 2, 36000, "heading 360.00 deg"},  {20, 2, uint16_t(-9001), "pitch -90.01 deg"},
+      {22, 2, 9001, "roll 90.01 deg"},       {26, 2, 6000, "temperature 60 degC"},
+      {24, 2, 41, "salinity 41 ppt"},        {14, 2, 1399, "sound speed 1399 m/s"},
+      {14, 2, 1601, "sound speed 1601 m/s"}, {48, 2, uint16_t(-10001), "pressure -10.001 dbar"},
+      {59, 1, 13, "Y2K RTC month 13"},       {60, 1, 31, "Y2K RTC 31 June"},
+      {62, 1, 60, "Y2K RTC minute 60"},      {64, 1, 100, "Y2K RTC hundredths 100"}};
   for (const Case& c : cases) {
     std::vector<uint8_t> bytes = encode_pd0(sample_ensemble());
     uint8_t* v = bytes.data() + kVariableAt;
-    if (c.offset == 60) v[59] = 6;  // June
+    if (c.offset == 60) v[59] = 6;             // June
     if (c.offset == 48) v[50] = v[51] = 0xFF;  // sign-extend to 32 bits
     v[c.offset] = uint8_t(c.raw & 0xFF);
     if (c.size == 2) v[c.offset + 1] = uint8_t(c.raw >> 8);
@@ -272,7 +294,7 @@ TEST(Pd0Codec, TwoDigitYearRtcWhenThereIsNoY2kCentury) {
 TEST(Pd0Codec, BottomTrackRangeChecksAndInvalidMarkers) {
   Pd0Ensemble in = sample_ensemble();
   in.bottom_track->velocity_mps = {25.0, -0.5, std::nullopt, 0.0};  // 25 m/s is absurd
-  in.bottom_track->range_m = {2500.0, 0.5, std::nullopt, 1999.99};   // 2.5 km is absurd
+  in.bottom_track->range_m = {2500.0, 0.5, std::nullopt, 1999.99};  // 2.5 km is absurd
   Pd0Decoder decoder;
   const auto out = decode_all(encode_pd0(in), decoder);
   ASSERT_EQ(out.size(), 1u);
@@ -316,8 +338,8 @@ TEST(Pd0Decoder, FlippedBitFailsTheChecksumAndTheNextEnsembleIsFound) {
 
 TEST(Pd0Decoder, TruncatedEnsembleIsDroppedAndTheFollowingOneDecoded) {
   const std::vector<uint8_t> good = encode_pd0(sample_ensemble(1));
-  for (std::size_t cut : {std::size_t(1), std::size_t(5), std::size_t(13), good.size() / 2,
-                          good.size() - 1}) {
+  for (std::size_t cut :
+       {std::size_t(1), std::size_t(5), std::size_t(13), good.size() / 2, good.size() - 1}) {
     std::vector<uint8_t> stream(good.begin(), good.begin() + std::ptrdiff_t(cut));
     append(stream, encode_pd0(sample_ensemble(2)));
     append(stream, encode_pd0(sample_ensemble(3)));
@@ -438,9 +460,8 @@ TEST(Pd0Decoder, SplitAtEveryByteGivesIdenticalOutput) {
   expect_split_invariant(stream);
   Pd0Decoder decoder;
   EXPECT_EQ(decode_all(stream, decoder).size(), 2u);
-  EXPECT_EQ(decoder.stats().bytes,
-            decoder.stats().dropped_bytes + decoder.buffered_bytes() +
-                2 * encode_pd0(sample_ensemble(1)).size());
+  EXPECT_EQ(decoder.stats().bytes, decoder.stats().dropped_bytes + decoder.buffered_bytes() +
+                                       2 * encode_pd0(sample_ensemble(1)).size());
 }
 
 // ---------------------------------------------------------------- real recordings
@@ -636,7 +657,8 @@ TEST(Pd0RealData, SplitAtEveryByteOnRealEnsembles) {
   // Three ensembles around the first valid bottom track, with garbage in front.
   DecodeStats stats;
   std::size_t offset = 0;
-  for (int k = 0; k < 506; ++k) offset += std::size_t(bytes[offset + 2] | (bytes[offset + 3] << 8)) + 2;
+  for (int k = 0; k < 506; ++k)
+    offset += std::size_t(bytes[offset + 2] | (bytes[offset + 3] << 8)) + 2;
   std::size_t end = offset;
   for (int k = 0; k < 3; ++k) end += std::size_t(bytes[end + 2] | (bytes[end + 3] << 8)) + 2;
   std::vector<uint8_t> stream = {0x7F, 0x00, 0x7F};

@@ -108,12 +108,13 @@ TEST(Pd6Codec, NextAttitudeLineEndsTheEnsembleTime) {
 }
 
 TEST(Pd6Codec, RangeChecksRejectAbsurdValues) {
-  const std::string lines[] = {
-      ":SA,+95.00, +1.07,271.45", ":SA, -2.31, +1.07,361.00",
-      ":TS,17052412025390,35.0,+71.5,  12.3,1524.5,  0",
-      ":TS,17052412025390,35.0,+21.5,  12.3,1700.0,  0",
-      ":TS,17133212025390,35.0,+21.5,  12.3,1524.5,  0",  // month 13
-      ":BE,+25000,  +200,   -30,A", ":BD,+0.00,+0.00,+0.00,2500.00,0.00"};
+  const std::string lines[] = {":SA,+95.00, +1.07,271.45",
+                               ":SA, -2.31, +1.07,361.00",
+                               ":TS,17052412025390,35.0,+71.5,  12.3,1524.5,  0",
+                               ":TS,17052412025390,35.0,+21.5,  12.3,1700.0,  0",
+                               ":TS,17133212025390,35.0,+21.5,  12.3,1524.5,  0",  // month 13
+                               ":BE,+25000,  +200,   -30,A",
+                               ":BD,+0.00,+0.00,+0.00,2500.00,0.00"};
   for (const std::string& line : lines) {
     Pd6Decoder decoder;
     const auto out = decode(line + "\r\n", decoder);
@@ -123,16 +124,15 @@ TEST(Pd6Codec, RangeChecksRejectAbsurdValues) {
 }
 
 TEST(Pd6Codec, MalformedAndUnsupportedLinesAreDroppedAndCounted) {
-  const std::string malformed[] = {
-      ":SA,+1.00,+2.00",                     // missing field
-      ":SA,+1.00,+2.00,abc",                 // not a number
-      ":SA,+1.00,+2.00,1.0.0",               // two points
-      ":BE,+1,+2,+3,X",                      // bad status flag
-      ":BI,+1,+2,+3,A",                      // instrument frame needs 4 components
-      ":TS,1705241202539,35.0,+21.5,12.3,1524.5,0",  // 13-digit time
-      ":TS,17052412025390,35.0,+21.5,12.3,1524.5,G",  // BIT not hex
-      ":S",                                  // too short
-      ":BD,+1,+2,+3,+4,+5,+6"};              // extra field
+  const std::string malformed[] = {":SA,+1.00,+2.00",        // missing field
+                                   ":SA,+1.00,+2.00,abc",    // not a number
+                                   ":SA,+1.00,+2.00,1.0.0",  // two points
+                                   ":BE,+1,+2,+3,X",         // bad status flag
+                                   ":BI,+1,+2,+3,A",         // instrument frame needs 4 components
+                                   ":TS,1705241202539,35.0,+21.5,12.3,1524.5,0",   // 13-digit time
+                                   ":TS,17052412025390,35.0,+21.5,12.3,1524.5,G",  // BIT not hex
+                                   ":S",                                           // too short
+                                   ":BD,+1,+2,+3,+4,+5,+6"};                       // extra field
   for (const std::string& line : malformed) {
     Pd6Decoder decoder;
     EXPECT_TRUE(decode(line + "\r\n", decoder).empty()) << line;

@@ -61,9 +61,10 @@ void run_parse(const ParseArgs& args) {
 
 void add_parse(CLI::App& app) {
   auto args = std::make_shared<ParseArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "parse", "Decode a recorded sensor stream: one JSON record per line on stdout, "
-               "{\"summary\": counters} on stderr");
+  CLI::App* cmd =
+      app.add_subcommand("parse",
+                         "Decode a recorded sensor stream: one JSON record per line on stdout, "
+                         "{\"summary\": counters} on stderr");
   cmd->add_option("--format", args->format, format_help())->required();
   cmd->add_option("file", args->file, "recorded byte stream")->required();
   cmd->add_option("--can-config", args->options.can_config_path,

@@ -137,8 +137,8 @@ void run_pd6(std::istream& in, std::ostream& records, drivers::DecodeStats& stat
 const ParseFormatRegistration kPd0{
     "pd0", ParseFormat{"Teledyne RDI PD0 binary ensembles (leaders, bottom track)", run_pd0}};
 const ParseFormatRegistration kPd6{
-    "pd6", ParseFormat{"Teledyne RDI PD6 ASCII lines (:SA :TS :WI/BI :WS/BS :WE/BE :WD/BD)",
-                       run_pd6}};
+    "pd6",
+    ParseFormat{"Teledyne RDI PD6 ASCII lines (:SA :TS :WI/BI :WS/BS :WE/BE :WD/BD)", run_pd6}};
 
 }  // namespace
 }  // namespace nav::tool

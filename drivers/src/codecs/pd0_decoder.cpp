@@ -36,8 +36,7 @@ void Pd0Decoder::compact() {
   start_ = 0;
 }
 
-Pd0Decoder::Step Pd0Decoder::try_decode(const HostTime& received,
-                                        std::vector<Pd0Ensemble>& out) {
+Pd0Decoder::Step Pd0Decoder::try_decode(const HostTime& received, std::vector<Pd0Ensemble>& out) {
   const uint8_t* p = buffer_.data() + start_;
   std::size_t avail = buffer_.size() - start_;
   // Search for the header IDs 0x7F 0x7F (a lone trailing 0x7F may be the first half).

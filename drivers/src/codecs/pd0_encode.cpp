@@ -47,9 +47,9 @@ void write_time(uint8_t* p, const std::optional<int64_t>& time_us) {
   const uint8_t fields[7] = {uint8_t(t.year % 100), uint8_t(t.month),  uint8_t(t.day),
                              uint8_t(t.hour),       uint8_t(t.minute), uint8_t(t.second),
                              uint8_t(t.hundredths)};
-  for (int i = 0; i < 7; ++i) p[4 + i] = fields[i];           // 5-11
-  p[57] = uint8_t(t.year / 100);                               // 58 century
-  for (int i = 0; i < 7; ++i) p[58 + i] = fields[i];          // 59-65
+  for (int i = 0; i < 7; ++i) p[4 + i] = fields[i];   // 5-11
+  p[57] = uint8_t(t.year / 100);                      // 58 century
+  for (int i = 0; i < 7; ++i) p[58 + i] = fields[i];  // 59-65
 }
 
 void write_variable(uint8_t* p, const Pd0Ensemble& e) {
@@ -62,8 +62,9 @@ void write_variable(uint8_t* p, const Pd0Ensemble& e) {
   put16(p + 14, e.sound_speed_mps ? uint16_t(quantize(*e.sound_speed_mps, 1, 0, 0xFFFF)) : 0);
   put16(p + 16, uint16_t(quantize(e.depth_m.value_or(0.0), 0.1, 0, 0xFFFF)));
   if (e.heading_rad) {
-    const double wrapped = std::fmod(std::fmod(*e.heading_rad, 2 * std::numbers::pi) +
-                                         2 * std::numbers::pi, 2 * std::numbers::pi);
+    const double wrapped =
+        std::fmod(std::fmod(*e.heading_rad, 2 * std::numbers::pi) + 2 * std::numbers::pi,
+                  2 * std::numbers::pi);
     const int64_t centideg = quantize(wrapped, 1 / kRadToCentiDeg, 0, 36000);
     put16(p + 18, uint16_t(centideg == 36000 ? 0 : centideg));
   } else {
@@ -75,11 +76,10 @@ void write_variable(uint8_t* p, const Pd0Ensemble& e) {
   put16(p + 20, centideg(e.pitch_rad));
   put16(p + 22, centideg(e.roll_rad));
   put16(p + 24, e.salinity_ppt ? uint16_t(quantize(*e.salinity_ppt, 1, 0, 0xFFFF)) : 0xFFFF);
-  put16(p + 26, e.temperature_c
-                    ? uint16_t(int16_t(quantize(*e.temperature_c, 0.01, -32767, 32767)))
-                    : uint16_t(0x8000));
-  put32(p + 48, uint32_t(int32_t(quantize(e.pressure_dbar.value_or(0.0), 0.001, INT32_MIN,
-                                           INT32_MAX))));
+  put16(p + 26, e.temperature_c ? uint16_t(int16_t(quantize(*e.temperature_c, 0.01, -32767, 32767)))
+                                : uint16_t(0x8000));
+  put32(p + 48,
+        uint32_t(int32_t(quantize(e.pressure_dbar.value_or(0.0), 0.001, INT32_MIN, INT32_MAX))));
 }
 
 void write_bottom_track(uint8_t* p, const Pd0BottomTrack& bt) {

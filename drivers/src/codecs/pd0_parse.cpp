@@ -19,8 +19,8 @@ constexpr double kCentiDegToRad = std::numbers::pi / 18000.0;
 // Documented ranges (manual's command descriptions) used to reject absurd values.
 constexpr double kMinTemperatureC = -10.0;  // ET accepts -5..40 degC; sensor margin either side
 constexpr double kMaxTemperatureC = 50.0;
-constexpr double kMaxSalinityPpt = 40.0;     // ES: 0..40
-constexpr double kMinSoundSpeedMps = 1400.0; // EC: 1400..1600
+constexpr double kMaxSalinityPpt = 40.0;      // ES: 0..40
+constexpr double kMinSoundSpeedMps = 1400.0;  // EC: 1400..1600
 constexpr double kMaxSoundSpeedMps = 1600.0;
 constexpr double kMinPressureDbar = -10.0;    // sensor offset at the surface
 constexpr double kMaxPressureDbar = 12000.0;  // deeper than any ocean
@@ -66,18 +66,18 @@ std::optional<double> in_range(double value, double lo, double hi, int& rejected
 
 void parse_fixed(const DataType& t, Pd0FixedLeader& f) {
   const uint8_t* p = t.data;
-  f.firmware_version = p[2];       // 3
-  f.firmware_revision = p[3];      // 4
-  f.system_config = le16(p + 4);   // 5-6
-  f.num_beams = p[8];              // 9
-  f.num_cells = p[9];              // 10
-  f.pings_per_ensemble = le16(p + 10);     // 11-12 (WP)
-  f.cell_length_m = le16(p + 12) * 0.01;   // 13-14 (WS), cm
-  f.blank_m = le16(p + 14) * 0.01;         // 15-16 (WF), cm
-  f.coord_transform = p[25];               // 26 (EX)
-  f.sensor_source = p[30];                 // 31 (EZ)
-  f.sensors_available = p[31];             // 32
-  f.bin1_distance_m = le16(p + 32) * 0.01; // 33-34, cm
+  f.firmware_version = p[2];                          // 3
+  f.firmware_revision = p[3];                         // 4
+  f.system_config = le16(p + 4);                      // 5-6
+  f.num_beams = p[8];                                 // 9
+  f.num_cells = p[9];                                 // 10
+  f.pings_per_ensemble = le16(p + 10);                // 11-12 (WP)
+  f.cell_length_m = le16(p + 12) * 0.01;              // 13-14 (WS), cm
+  f.blank_m = le16(p + 14) * 0.01;                    // 15-16 (WF), cm
+  f.coord_transform = p[25];                          // 26 (EX)
+  f.sensor_source = p[30];                            // 31 (EZ)
+  f.sensors_available = p[31];                        // 32
+  f.bin1_distance_m = le16(p + 32) * 0.01;            // 33-34, cm
   f.serial_number = t.size >= 58 ? le32(p + 54) : 0;  // 55-58
   f.beam_angle_deg = t.size >= 59 ? p[58] : 0;        // 59
 }
@@ -98,11 +98,11 @@ void parse_variable(const DataType& t, Pd0Ensemble& e, int& rejected) {
   e.ensemble_number = le16(p + 2) + (uint32_t(p[11]) << 16);  // 3-4, MSB 12
   e.time.sensor_time_us = rtc_time(t);
   if (!e.time.sensor_time_us) ++rejected;
-  e.bit_result = le16(p + 12);                                     // 13-14
+  e.bit_result = le16(p + 12);  // 13-14
   e.sound_speed_mps =
       in_range(le16(p + 14), kMinSoundSpeedMps, kMaxSoundSpeedMps, rejected);  // 15-16
-  e.depth_m = le16(p + 16) * 0.1;                                  // 17-18, dm
-  const uint16_t heading = le16(p + 18);                           // 19-20
+  e.depth_m = le16(p + 16) * 0.1;                                              // 17-18, dm
+  const uint16_t heading = le16(p + 18);                                       // 19-20
   if (heading < 36000) {
     e.heading_rad = heading * kCentiDegToRad;
   } else {
@@ -111,9 +111,9 @@ void parse_variable(const DataType& t, Pd0Ensemble& e, int& rejected) {
   const double half_pi = std::numbers::pi / 2;
   e.pitch_rad = in_range(le16s(p + 20) * kCentiDegToRad, -half_pi, half_pi, rejected);  // 21-22
   e.roll_rad = in_range(le16s(p + 22) * kCentiDegToRad, -half_pi, half_pi, rejected);   // 23-24
-  e.salinity_ppt = in_range(le16(p + 24), 0.0, kMaxSalinityPpt, rejected);             // 25-26
+  e.salinity_ppt = in_range(le16(p + 24), 0.0, kMaxSalinityPpt, rejected);              // 25-26
   e.temperature_c =
-      in_range(le16s(p + 26) * 0.01, kMinTemperatureC, kMaxTemperatureC, rejected);     // 27-28
+      in_range(le16s(p + 26) * 0.01, kMinTemperatureC, kMaxTemperatureC, rejected);  // 27-28
   if (t.size >= kVariablePressureBytes) {
     // 49-52, daPa. The manual lists it unsigned, but instruments at the surface report small
     // negative offsets in two's complement (e.g. -7 daPa in RDI_withBT.000): read signed.
@@ -190,8 +190,7 @@ Pd0ParseError parse_pd0_ensemble(std::span<const uint8_t> ensemble, Pd0Ensemble&
     }
   }
   if (!fixed || !variable) return Pd0ParseError::kUnsupported;
-  if (fixed->size < kFixedLeaderMinBytes ||
-      variable->size < kVariableLeaderMinBytes ||
+  if (fixed->size < kFixedLeaderMinBytes || variable->size < kVariableLeaderMinBytes ||
       (bottom && bottom->size < kBottomTrackMinBytes)) {
     return Pd0ParseError::kMalformed;
   }

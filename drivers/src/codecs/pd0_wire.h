@@ -36,8 +36,7 @@ constexpr int16_t kInvalidVelocity = -32768;
 inline uint16_t le16(const uint8_t* p) { return uint16_t(p[0] | (uint16_t(p[1]) << 8)); }
 inline int16_t le16s(const uint8_t* p) { return int16_t(le16(p)); }
 inline uint32_t le32(const uint8_t* p) {
-  return uint32_t(p[0]) | (uint32_t(p[1]) << 8) | (uint32_t(p[2]) << 16) |
-         (uint32_t(p[3]) << 24);
+  return uint32_t(p[0]) | (uint32_t(p[1]) << 8) | (uint32_t(p[2]) << 16) | (uint32_t(p[3]) << 24);
 }
 inline void put16(uint8_t* p, uint16_t v) {
   p[0] = uint8_t(v & 0xFF);

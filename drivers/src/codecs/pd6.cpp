@@ -50,8 +50,8 @@ std::optional<double> number(std::string_view field) {
   }
   if (s.empty() || !(s.front() >= '0' && s.front() <= '9')) return std::nullopt;
   double value = 0.0;
-  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), value,
-                                         std::chars_format::fixed);
+  const auto [end, ec] =
+      std::from_chars(s.data(), s.data() + s.size(), value, std::chars_format::fixed);
   if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(value)) {
     return std::nullopt;
   }
@@ -144,7 +144,8 @@ bool parse_distance(const std::vector<std::string_view>& f, Pd6Distance& d, int&
     if (*values[i] == kInvalid) values[i].reset();
   }
   for (int i = 0; i < 3; ++i) {
-    if (values[i]) d.distance_enu_m[i] = ranged(*values[i], -kMaxDistanceM, kMaxDistanceM, rejected);
+    if (values[i])
+      d.distance_enu_m[i] = ranged(*values[i], -kMaxDistanceM, kMaxDistanceM, rejected);
   }
   if (values[3]) d.range_m = ranged(*values[3], 0.0, kMaxRangeM, rejected);
   if (values[4]) d.time_since_valid_s = ranged(*values[4], 0.0, 1e6, rejected);
@@ -282,8 +283,10 @@ std::string encode_pd6(const Pd6Record& record) {
   if (const auto* a = std::get_if<Pd6Attitude>(&record.value)) {
     const double r2d = 180.0 / std::numbers::pi;
     double heading_deg = 999.99;  // out of range: decodes empty
-    if (a->heading_rad) {  // wrapped to [0, 360) after rounding to the field's 0.01 deg
-      heading_deg = std::round(std::fmod(std::fmod(*a->heading_rad * r2d, 360.0) + 360.0, 360.0) * 100.0) / 100.0;
+    if (a->heading_rad) {         // wrapped to [0, 360) after rounding to the field's 0.01 deg
+      heading_deg =
+          std::round(std::fmod(std::fmod(*a->heading_rad * r2d, 360.0) + 360.0, 360.0) * 100.0) /
+          100.0;
       if (heading_deg >= 360.0) heading_deg = 0.0;
     }
     std::snprintf(buf, sizeof buf, ":SA,%+06.2f,%+06.2f,%06.2f\r\n",

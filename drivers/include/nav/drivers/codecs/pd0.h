@@ -82,9 +82,9 @@ struct Pd0Ensemble {
   Timestamps time;
   uint32_t ensemble_number = 0;  ///< LSB word + MSB byte * 65536
   Pd0FixedLeader fixed;
-  std::optional<double> heading_rad;  ///< [0, 2pi), 0.01 deg on the wire (EH)
-  std::optional<double> pitch_rad;    ///< tilt 1, [-pi/2, pi/2], 0.01 deg signed (EP)
-  std::optional<double> roll_rad;     ///< tilt 2, [-pi/2, pi/2], 0.01 deg signed (ER)
+  std::optional<double> heading_rad;      ///< [0, 2pi), 0.01 deg on the wire (EH)
+  std::optional<double> pitch_rad;        ///< tilt 1, [-pi/2, pi/2], 0.01 deg signed (EP)
+  std::optional<double> roll_rad;         ///< tilt 2, [-pi/2, pi/2], 0.01 deg signed (ER)
   std::optional<double> temperature_c;    ///< 0.01 degC signed (ET)
   std::optional<double> salinity_ppt;     ///< ppt (ES)
   std::optional<double> sound_speed_mps;  ///< m/s (EC)
@@ -115,9 +115,12 @@ struct Pd0DecoderOptions {
 /// drops one byte and searches for the next 0x7F 0x7F. A header is believed (and the decoder
 /// waits for its N bytes) only when its offset table is consistent: first offset right after
 /// the table and pointing at the fixed leader ID 0x0000, offsets increasing and inside N, as
-/// every RDI instrument writes them; this keeps a 0x7F7F in garbage from stalling output. Every byte fed ends up either in an
-/// emitted ensemble, in `stats().dropped_bytes`, or (at most one incomplete ensemble) in
-/// `buffered_bytes()`. Not thread-safe; one decoder per stream.
+/// every RDI instrument writes them; this keeps a 0x7F7F in garbage from stalling output. Every
+/// byte fed ends up either in an emitted ensemble, in `stats().dropped_bytes`, or (at most one
+/// incomplete ensemble) in `buffered_bytes()`. stats().out_of_range counts ensembles in which at
+/// least one value was rejected by its range check; such an ensemble is still emitted with those
+/// values empty. An emitted ensemble's host time is the `received` of the feed() call that
+/// completed it. Not thread-safe; one decoder per stream.
 class Pd0Decoder {
  public:
   explicit Pd0Decoder(Pd0DecoderOptions options = {});

@@ -88,13 +88,13 @@ std::string pd6_line_name(const Pd6Record& record);
 /// Streaming PD6 decoder. A line starts at ':' and ends at LF (a CR before it is removed);
 /// bytes outside lines, over-long lines (> kMaxLineBytes), malformed lines and lines of other
 /// IDs are dropped and counted (malformed / unsupported). Every byte fed ends up in an emitted
-/// line, in stats().dropped_bytes or (one partial line) in buffered_bytes().
+/// line, in stats().dropped_bytes or (one partial line) in buffered_bytes(). out_of_range
+/// counts emitted lines with at least one value rejected by its range check.
 class Pd6Decoder {
  public:
   static constexpr std::size_t kMaxLineBytes = 128;
 
-  void feed(std::span<const uint8_t> bytes, const HostTime& received,
-            std::vector<Pd6Record>& out);
+  void feed(std::span<const uint8_t> bytes, const HostTime& received, std::vector<Pd6Record>& out);
   const DecodeStats& stats() const { return stats_; }
   std::size_t buffered_bytes() const { return line_.size(); }
 
@@ -102,8 +102,8 @@ class Pd6Decoder {
   void end_line(const HostTime& received, std::vector<Pd6Record>& out);
   void drop_line();
 
-  std::string line_;          ///< current line from ':' (empty while searching)
-  bool discarding_ = false;   ///< inside an over-long line: drop up to its LF
+  std::string line_;                         ///< current line from ':' (empty while searching)
+  bool discarding_ = false;                  ///< inside an over-long line: drop up to its LF
   std::optional<int64_t> ensemble_time_us_;  ///< last :TS time of the current ensemble
   DecodeStats stats_;
 };
