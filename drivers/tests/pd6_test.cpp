@@ -99,6 +99,36 @@ TEST(Pd6Codec, DecodesEveryLineOfAnEnsemble) {
   EXPECT_EQ(s.malformed + s.unsupported + s.out_of_range, 0u);
 }
 
+TEST(Pd6Codec, DecodesThirdPartyProducerExample) {
+  // The example PD6 output printed in the Water Linked DVL protocol documentation ("PD6",
+  // "Example output"), a PD6 producer other than RDI: zero-filled unused lines.
+  const std::string text =
+      ":SA, +0.00, +0.00,  0.00\r\n"
+      ":TS,22020812061800, 0.0, +0.0,   0.0,1475.0,  0\r\n"
+      ":WI,    +0,    +0,    +0,    +0,V\r\n"
+      ":WS,    +0,    +0,    +0,V\r\n"
+      ":WE,    +0,    +0,    +0,V\r\n"
+      ":WD,       +0.00,       +0.00,       +0.00,   0.00,  0.00\r\n"
+      ":BI,  +123,  -420, +2000,    +0,A\r\n"
+      ":BS,  -420,  +123, +2000,A\r\n"
+      ":BE,    +0,    +0,    +0,V\r\n"
+      ":BD,       +0.00,       +0.00,       +0.00,   5.32,  0.00\r\n";
+  Pd6Decoder decoder;
+  const auto out = decode(text, decoder);
+  ASSERT_EQ(out.size(), 10u);
+  EXPECT_EQ(decoder.stats().malformed + decoder.stats().out_of_range, 0u);
+  EXPECT_EQ(out[1].time.sensor_time_us, 1644321978'000000);  // 2022-02-08T12:06:18.00Z
+  EXPECT_NEAR(*std::get<Pd6TimingScaling>(out[1].value).sound_speed_mps, 1475.0, 1e-12);
+  const auto& bi = std::get<Pd6Velocity>(out[6].value);
+  ASSERT_TRUE(bi.valid);
+  EXPECT_NEAR(*bi.velocity_mps[0], 0.123, 1e-12);
+  EXPECT_NEAR(*bi.velocity_mps[1], -0.420, 1e-12);
+  EXPECT_NEAR(*bi.velocity_mps[2], 2.0, 1e-12);
+  EXPECT_NEAR(*bi.velocity_mps[3], 0.0, 1e-12);
+  EXPECT_FALSE(std::get<Pd6Velocity>(out[8].value).velocity_mps[0]);  // status V
+  EXPECT_NEAR(*std::get<Pd6Distance>(out[9].value).range_m, 5.32, 1e-12);
+}
+
 TEST(Pd6Codec, NextAttitudeLineEndsTheEnsembleTime) {
   Pd6Decoder decoder;
   const auto out = decode(kEnsemble + ":SA, +0.00, +0.00,  0.00\r\n:BE,+1,+2,+3,A\r\n", decoder);

@@ -112,6 +112,11 @@ void Pd0Decoder::feed(std::span<const uint8_t> bytes, const HostTime& received,
     // Never hold more than one maximal ensemble: after decoding stops for want of bytes, the
     // buffer holds less than the ensemble it waits for, so there is always room for a byte.
     compact();
+    if (buffer_.size() >= options_.max_ensemble_bytes) {  // unreachable; never spin
+      ++stats_.malformed;
+      drop(1);
+      compact();
+    }
     const std::size_t room = options_.max_ensemble_bytes - buffer_.size();
     const std::size_t take = std::min(room, bytes.size());
     buffer_.insert(buffer_.end(), bytes.begin(), bytes.begin() + std::ptrdiff_t(take));
