@@ -201,6 +201,29 @@ TEST(ClockMapping, UncertaintyIsSmallInsideAndGrowsOutsideTheWindow) {
   EXPECT_GT(outside, 5.0 * inside);
 }
 
+TEST(ClockMapping, ArbitrarySamplesKeepCountersAndOutputsSane) {
+  ClockMappingOptions o;
+  o.sensor_modulus_us = 65'536'000;
+  o.max_samples = 50;
+  ClockMapping mapping(o);
+  std::mt19937_64 rng(6);
+  int64_t host = 0;
+  for (int i = 0; i < 20000; ++i) {
+    host += static_cast<int64_t>(rng() % 3'000'000) - 100'000;  // sometimes backwards
+    const int64_t sensor = static_cast<int64_t>(rng() % 70'000'000) - 1'000'000;
+    mapping.update(sensor, host);
+    if (const auto mapped = mapping.to_host_us(sensor)) {
+      EXPECT_LT(std::abs(*mapped - host), int64_t{1} << 40);
+      EXPECT_TRUE(std::isfinite(*mapping.uncertainty_us(sensor)));
+    }
+  }
+  const ClockMappingStats& s = mapping.stats();
+  EXPECT_EQ(s.samples, 20000u);
+  EXPECT_EQ(s.accepted + s.outliers + s.resets + s.invalid, s.samples);
+  EXPECT_GT(s.invalid, 0u);
+  EXPECT_GT(s.resets, 0u);
+}
+
 TEST(ClockMapping, OptionsValidateNamesTheField) {
   ClockMappingOptions o;
   EXPECT_EQ(o.validate(), "");
