@@ -185,7 +185,7 @@ TEST(Nmea, TruncatedSentenceThenGoodOne) {
 
 TEST(Nmea, GarbageBetweenSentencesIsDroppedAndCounted) {
   const std::string good = "$HEHDT,41.87,T*25\r\n";
-  const std::string garbage = std::string("\x00\xff\x7f junk \x01", 12) + "\r\n\n";
+  const std::string garbage = std::string("\x00\xff\x7f junk \x01", 10) + "\r\n\n";
   const Result r = decode(garbage + good + garbage + good + garbage);
   ASSERT_EQ(r.records.size(), 2u);
   EXPECT_EQ(r.stats.dropped_bytes, 3 * garbage.size());
@@ -258,7 +258,7 @@ TEST(Nmea, MissingChecksumConfigurable) {
 
 std::string mixed_stream() {
   std::string text = join_crlf(kIxblueSentences);
-  text += std::string("\x00\x13garbage\xfe", 11);
+  text += std::string("\x00\x13garbage\xfe", 10);
   text += "$HEHDT,41.87,T*26\r\n";  // bad checksum
   text += "$PIXSE,ATITUD,1.0";      // truncated
   text += join_crlf(kUnsupported);

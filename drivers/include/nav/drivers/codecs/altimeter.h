@@ -40,7 +40,8 @@ struct AltimeterFormat {
   std::vector<double> no_echo_values_m = {0.0, 99.99, 999.99};
   /// NMEA forms: accept sentences without "*hh".
   bool require_checksum = true;
-  /// Longest accepted line/sentence including terminator; range [8, 256].
+  /// Longest accepted record in characters: plain lines without their terminator, NMEA
+  /// sentences including '$' and CR LF (82 per NMEA 0183); range [8, 256].
   std::size_t max_line_chars = 82;
 
   std::string validate() const;

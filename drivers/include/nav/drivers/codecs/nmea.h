@@ -15,7 +15,11 @@
 // * PHTRO (iXblue "Octans/PHINS standard" output, SMC IMU manual 4.2.21): pitch magnitude with
 //   'M' bow up / 'P' bow down, roll magnitude with 'B' port down / 'T' port up.
 // * PIXSE,ATITUD,roll,pitch: iXblue convention roll positive port up (= starboard down, same as
-//   ours) and pitch positive bow down (opposite to ours; see NmeaOptions).
+//   ours) and pitch positive bow down (opposite to ours; see NmeaOptions). This follows from the
+//   iXblue vehicle frame XV1 bow, XV2 port, XV3 up with right-handed rotations (Octans "AHRS
+//   Advanced Configuration" guide MU-AHRS-AN-002, appendix B "Orientation and sign conventions").
+// * PIXSE,HEADNG,x.xxx: heading in degrees. Not found in the iXblue documents available when
+//   this was written; decoded as a single true-heading field like HDT.
 // * PIXSE,POSITI,lat_deg,lon_deg,altitude_m; PIXSE,SPEED_,east,north,up in m/s;
 //   PIXSE,STDHRP heading/roll/pitch std in deg; STDPOS lat/lon/altitude std in m;
 //   STDSPD east/north/up std in m/s; STATUS/ALGSTS two 32-bit hex words (LSB word first).
