@@ -8,6 +8,7 @@
 #include <cmath>
 #include <sstream>
 #include <string>
+#include <utility>
 
 namespace nav::core {
 namespace {
@@ -21,21 +22,25 @@ Status invalid(const std::string& where, const std::string& what) {
   return Status::Error(StatusCode::kInvalidArgument, where + ": " + what);
 }
 
-/// Index of the first non-finite entry, or -1.
+/// Position (row, col) of the first non-finite entry, or (-1, -1). 2-D indexing, so it is
+/// correct for Eigen::Ref views with any outer stride.
 template <class M>
-Eigen::Index first_non_finite(const M& m) {
-  for (Eigen::Index k = 0; k < m.size(); ++k) {
-    if (!std::isfinite(m.data()[k])) return k;
+std::pair<Eigen::Index, Eigen::Index> first_non_finite(const M& m) {
+  for (Eigen::Index c = 0; c < m.cols(); ++c) {
+    for (Eigen::Index r = 0; r < m.rows(); ++r) {
+      if (!std::isfinite(m(r, c))) return {r, c};
+    }
   }
-  return -1;
+  return {-1, -1};
 }
 
 template <class M>
 Status check_finite(const M& m, const std::string& where, const char* name) {
-  const Eigen::Index k = first_non_finite(m);
-  if (k < 0) return Status::Ok();
+  const auto [r, c] = first_non_finite(m);
+  if (r < 0) return Status::Ok();
   std::ostringstream os;
-  os << name << " has a non-finite entry (" << m.data()[k] << " at flat index " << k << ")";
+  os << name << " has a non-finite entry (" << m(r, c) << " at row " << r << ", column " << c
+     << ")";
   return invalid(where, os.str());
 }
 
@@ -138,8 +143,10 @@ Status Esdf::initialize(const Eigen::VectorXd& x0, const Eigen::MatrixXd& P0) {
 // Only x_t's neighbours are touched. In the delayed-state chain x_t's only neighbour is the
 // newest delayed state (camera links join delayed states), so the fill-in is exactly the
 // robot–newest pair (ICRA 2005, Fig. 2). The mean of x_{t+1} is f(μ_t).
-Status Esdf::predict(const Eigen::VectorXd& f_of_mean, const Eigen::MatrixXd& F,
-                     const Eigen::MatrixXd& Q, bool keep_current, int* kept_block) {
+Status Esdf::predict(const Eigen::Ref<const Eigen::VectorXd>& f_of_mean,
+                     const Eigen::Ref<const Eigen::MatrixXd>& F,
+                     const Eigen::Ref<const Eigen::MatrixXd>& Q, bool keep_current,
+                     int* kept_block) {
   const std::string where = "Esdf::predict";
   if (!initialized()) {
     return Status::Error(StatusCode::kUnknownState, where + ": filter not initialised");
@@ -350,7 +357,7 @@ Status Esdf::recover_mean_direct() {
                          where + ": CHOLMOD factorisation of Λ failed (not positive definite?)");
   }
   const Eigen::VectorXd mu = chol.solve(eta_.dense());
-  if (chol.info() != Eigen::Success || first_non_finite(mu) >= 0) {
+  if (chol.info() != Eigen::Success || first_non_finite(mu).first >= 0) {
     return Status::Error(StatusCode::kNumericalFailure,
                          where + ": CHOLMOD solve produced a non-finite mean");
   }

@@ -59,8 +59,11 @@ class Esdf {
   /// Augments x_{t+1}, then marginalises x_t unless keep_current, in which case x_t is kept as
   /// a new delayed block (its index written to *kept_block) and x_{t+1} becomes block 0.
   /// Equations: see esdf.cpp.
-  Status predict(const Eigen::VectorXd& f_of_mean, const Eigen::MatrixXd& F,
-                 const Eigen::MatrixXd& Q, bool keep_current, int* kept_block = nullptr);
+  /// Arguments are Eigen::Ref so fixed-size Vec12/Mat12 bind without a heap copy.
+  Status predict(const Eigen::Ref<const Eigen::VectorXd>& f_of_mean,
+                 const Eigen::Ref<const Eigen::MatrixXd>& F,
+                 const Eigen::Ref<const Eigen::MatrixXd>& Q, bool keep_current,
+                 int* kept_block = nullptr);
 
   /// Same with the constant-velocity model evaluated at the current robot mean (block_dim 12).
   Status predict(const ConstantVelocityModel& model, double dt_s, bool keep_current,
