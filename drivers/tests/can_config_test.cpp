@@ -137,6 +137,38 @@ TEST(CanConfig, ExampleTimeSignalsGiveSensorTimes) {
   EXPECT_FALSE(v->value("v_y_mps").has_value());
 }
 
+TEST(CanConfig, EveryFlippedBitChangesOnlyTheSignalThatOwnsIt) {
+  // The example's layouts do not overlap (apart from multiplexed alternatives): flipping one
+  // payload bit changes the raw value of exactly the signal that covers it, by one bit.
+  CanSignalDecoder decoder(load_can_config_file(kExample).messages);
+  size_t owned_bits = 0;
+  for (const CanMessageSpec& spec : decoder.messages()) {
+    const std::vector<uint8_t> zero(spec.dlc, 0);
+    const auto base = decoder.decode(spec.id, spec.extended, zero, {});
+    ASSERT_TRUE(base.has_value());
+    for (uint32_t bit = 0; bit < 8u * spec.dlc; ++bit) {
+      std::vector<uint8_t> flipped = zero;
+      flipped[bit / 8] ^= static_cast<uint8_t>(1u << (bit % 8));
+      const auto f = decoder.decode(spec.id, spec.extended, flipped, {});
+      ASSERT_TRUE(f.has_value());
+      if (f->multiplexer_value != base->multiplexer_value) continue;  // the switch itself
+      size_t changed = 0;
+      for (size_t i = 0; i < f->signals.size(); ++i) {
+        const uint64_t diff = f->signals[i].raw ^ base->signals[i].raw;
+        if (diff == 0) continue;
+        ++changed;
+        EXPECT_EQ(diff & (diff - 1), 0u) << spec.name << " bit " << bit;  // a single bit
+      }
+      EXPECT_LE(changed, 1u) << spec.name << " bit " << bit;
+      owned_bits += changed;
+    }
+  }
+  // Bits covered by the example's signals: dvl_velocity 62 (bits 54, 55 spare), dvl_time 64,
+  // dvl_range 40 (beam 1's range, ping_seq, quality; the switch byte is skipped),
+  // fog_attitude 61 (bits 48..50 spare), fog_rates 64, fog_time 40.
+  EXPECT_EQ(owned_bits, 62u + 64u + 40u + 61u + 64u + 40u);
+}
+
 TEST(CanConfig, MinimalConfigWithHexAndDefaults) {
   const CanConfig c = parse_can_config(kMinimal);
   ASSERT_EQ(c.messages.size(), 1u);
