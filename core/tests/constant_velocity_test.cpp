@@ -3,14 +3,13 @@
 
 #include "nav/core/models/constant_velocity.h"
 
-#include "pose_test_support.h"
-
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
-
 #include <limits>
 #include <stdexcept>
+
+#include "pose_test_support.h"
 
 namespace nav::core {
 namespace {
@@ -86,9 +85,9 @@ TEST(ConstantVelocity, ProcessNoiseMatchesQuadratureAndIsPsd) {
     Mat12 F_half, F_full;
     model.predict(x, dt_s / 2, &F_half);
     model.predict(x, dt_s, &F_full);
-    const Mat12 expected = dt_s / 6.0 *
-                           (GQcGt + 4.0 * F_half * GQcGt * F_half.transpose() +
-                            F_full * GQcGt * F_full.transpose());
+    const Mat12 expected =
+        dt_s / 6.0 *
+        (GQcGt + 4.0 * F_half * GQcGt * F_half.transpose() + F_full * GQcGt * F_full.transpose());
     const Mat12 Q = model.process_noise(x, dt_s);
     ASSERT_LT(max_abs_diff(Q, expected), 1e-12) << "x " << x.transpose() << " dt " << dt_s;
     ASSERT_EQ(max_abs_diff(Q, Q.transpose()), 0.0);

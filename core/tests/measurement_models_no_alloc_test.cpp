@@ -3,15 +3,15 @@
 // malloc is interposed in this executable (glibc's __libc_malloc does the work); under
 // AddressSanitizer, which owns malloc itself, the test skips.
 
-#include "nav/core/geometry/pose.h"
-#include "nav/core/models/binary_models.h"
-#include "nav/core/models/constant_velocity.h"
-#include "nav/core/models/unary_models.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstddef>
+
+#include "nav/core/geometry/pose.h"
+#include "nav/core/models/binary_models.h"
+#include "nav/core/models/constant_velocity.h"
+#include "nav/core/models/unary_models.h"
 
 #if defined(__SANITIZE_ADDRESS__)
 #define NAV_GEOM_ASAN 1
@@ -89,8 +89,8 @@ TEST(MeasurementModelsNoAlloc, PredictionsWithJacobiansDoNotAllocate) {
       sink += HeadingModel{}.predict(x_a, &H_a)[0];
       sink += AttitudeModel{}.predict(x_a.head<6>(), &H_a)[1];
       sink += depth.predict(x_a, &H_a)[0];
-      sink += RelativePose6Model{}.predict(state.segment(0, 12), state.segment(12, 12), &H_a,
-                                           &H_b)[0];
+      sink +=
+          RelativePose6Model{}.predict(state.segment(0, 12), state.segment(12, 12), &H_a, &H_b)[0];
       sink += camera.predict(x_a, x_b, &H_a, &H_b)[0] + H_b(4, kHeading);
       sink += head_to_tail(x_a.head<6>(), x_b.head<6>(), &J)[0];
       sink += tail_to_tail(x_a.head<6>(), x_b.head<6>(), &J)[0];

@@ -1,14 +1,13 @@
 // Tests of models/unary_models.h and models/binary_models.h: hand-computed cases, and every
 // analytic Jacobian against central differences on 1,000 random states (pitch <= 80 deg).
 
-#include "nav/core/models/binary_models.h"
-#include "nav/core/models/unary_models.h"
-
-#include "pose_test_support.h"
-
 #include <gtest/gtest.h>
 
 #include <stdexcept>
+
+#include "nav/core/models/binary_models.h"
+#include "nav/core/models/unary_models.h"
+#include "pose_test_support.h"
 
 namespace nav::core {
 namespace {
@@ -66,11 +65,11 @@ void expect_binary_jacobian(const Model& model, const Eigen::VectorXd& x_a,
     return test::wrapped_minus(a, b, rows);
   };
   const Eigen::MatrixXd N_a = numeric_jacobian(
-      [&](const Eigen::VectorXd& v) -> Eigen::VectorXd { return model.predict(v, x_b); }, x_a,
-      1e-6, minus);
+      [&](const Eigen::VectorXd& v) -> Eigen::VectorXd { return model.predict(v, x_b); }, x_a, 1e-6,
+      minus);
   const Eigen::MatrixXd N_b = numeric_jacobian(
-      [&](const Eigen::VectorXd& v) -> Eigen::VectorXd { return model.predict(x_a, v); }, x_b,
-      1e-6, minus);
+      [&](const Eigen::VectorXd& v) -> Eigen::VectorXd { return model.predict(x_a, v); }, x_b, 1e-6,
+      minus);
   ASSERT_LT(max_abs_diff(H_a, N_a), kJacobianTol)
       << "x_a " << x_a.transpose() << "\nx_b " << x_b.transpose();
   ASSERT_LT(max_abs_diff(H_b, N_b), kJacobianTol)
@@ -179,8 +178,8 @@ TEST(DepthModel, LeverArmByHand) {
   // Level: sensor 0.2 m below the reference point.
   EXPECT_NEAR(depth.predict(pose(0, 0, 10, 0, 0, 1.0))[0], 10.2, 1e-15);
   // Nose up 30 deg: forward sensor rises by sin(30) = 0.5, the 0.2 m offset becomes 0.2 cos 30.
-  EXPECT_NEAR(depth.predict(pose(0, 0, 10, 0, deg(30), 0))[0],
-              10.0 - 0.5 + 0.2 * std::cos(deg(30)), 1e-15);
+  EXPECT_NEAR(depth.predict(pose(0, 0, 10, 0, deg(30), 0))[0], 10.0 - 0.5 + 0.2 * std::cos(deg(30)),
+              1e-15);
 }
 
 TEST(DepthModel, JacobianMatchesNumeric) {
@@ -218,8 +217,7 @@ TEST(RelativePose6Model, EqualsTailToTailAndJacobianMatchesNumeric) {
     const Vec12 a = test::random_state(rng), b = test::random_state(rng);
     if (std::abs(tail_to_tail(a.head<6>(), b.head<6>())[kPitch]) > deg(80)) continue;
     ++n;
-    ASSERT_LT(max_abs_diff(model.predict(a, b), tail_to_tail(a.head<6>(), b.head<6>())),
-              1e-15);
+    ASSERT_LT(max_abs_diff(model.predict(a, b), tail_to_tail(a.head<6>(), b.head<6>())), 1e-15);
     if (n % 2 == 0) {
       expect_binary_jacobian(model, a, b);
     } else {
@@ -240,10 +238,10 @@ TEST(CameraRelativePoseModel, AzimuthElevationOfKnownBaselines) {
     double azimuth, elevation;
   };
   const double s2 = std::sqrt(2.0);
-  for (const Case& c : {Case{{1, 0, 0}, 0.0, 0.0}, Case{{0, 2, 0}, kPi / 2, 0.0},
-                        Case{{-1, 0, 0}, kPi, 0.0}, Case{{0, -1, 0}, -kPi / 2, 0.0},
-                        Case{{1, 0, 1}, 0.0, kPi / 4}, Case{{1, 1, s2}, kPi / 4, kPi / 4},
-                        Case{{1, 1, -s2}, kPi / 4, -kPi / 4}}) {
+  for (const Case& c :
+       {Case{{1, 0, 0}, 0.0, 0.0}, Case{{0, 2, 0}, kPi / 2, 0.0}, Case{{-1, 0, 0}, kPi, 0.0},
+        Case{{0, -1, 0}, -kPi / 2, 0.0}, Case{{1, 0, 1}, 0.0, kPi / 4},
+        Case{{1, 1, s2}, kPi / 4, kPi / 4}, Case{{1, 1, -s2}, kPi / 4, -kPi / 4}}) {
     const Vec6 b = pose(c.t.x(), c.t.y(), c.t.z(), 0.1, -0.2, 0.3);
     const MeasVec z = cam.predict(a, b);
     ASSERT_EQ(z.size(), 5);

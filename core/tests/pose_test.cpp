@@ -3,11 +3,11 @@
 
 #include "nav/core/geometry/pose.h"
 
-#include "pose_test_support.h"
-
 #include <gtest/gtest.h>
 
 #include <stdexcept>
+
+#include "pose_test_support.h"
 
 namespace nav::core {
 namespace {
@@ -58,8 +58,8 @@ TEST(Pose, InverseAndTailToTailByHand) {
 }
 
 TEST(Pose, PoseMinusWrapsAnglesOnly) {
-  const Vec6 d = pose_minus(pose(10, 0, 0, deg(179), 0, deg(-179)),
-                            pose(-10, 0, 0, deg(-179), 0, deg(179)));
+  const Vec6 d =
+      pose_minus(pose(10, 0, 0, deg(179), 0, deg(-179)), pose(-10, 0, 0, deg(-179), 0, deg(179)));
   expect_pose_near(d, pose(20, 0, 0, deg(-2), 0, deg(2)), 1e-12, "pose_minus");
   EXPECT_NEAR(d[0], 20.0, 0.0);
 }
@@ -131,8 +131,8 @@ TEST(Pose, InverseJacobianMatchesNumeric) {
     Mat6 J;
     inverse_pose(a, &J);
     const Eigen::MatrixXd N = numeric_jacobian(
-        [](const Eigen::VectorXd& v) -> Eigen::VectorXd { return inverse_pose(Vec6(v)); }, a,
-        1e-6, test::pose_diff);
+        [](const Eigen::VectorXd& v) -> Eigen::VectorXd { return inverse_pose(Vec6(v)); }, a, 1e-6,
+        test::pose_diff);
     ASSERT_LT(max_abs_diff(J, N), kJacobianTol) << "a " << a.transpose();
   }
 }

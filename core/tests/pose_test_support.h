@@ -2,17 +2,16 @@
 // Random poses and robot states for the geometry and model tests (fixed seeds), and the
 // numeric-Jacobian adaptors with angle-wrapped differences. Test-only.
 
-#include "nav/core/geometry/pose.h"
-#include "nav/core/geometry/rotation.h"
-#include "nav/core/geometry/types.h"
-#include "nav/testing/numeric_jacobian.h"
-
 #include <Eigen/Core>
-
 #include <cmath>
 #include <numbers>
 #include <random>
 #include <vector>
+
+#include "nav/core/geometry/pose.h"
+#include "nav/core/geometry/rotation.h"
+#include "nav/core/geometry/types.h"
+#include "nav/testing/numeric_jacobian.h"
 
 namespace nav::core::test {
 

@@ -3,23 +3,22 @@
 
 #include "nav/core/geometry/rotation.h"
 
-#include "pose_test_support.h"
-
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
-
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
+#include "pose_test_support.h"
+
 namespace nav::core {
 namespace {
 
-using test::deg;
-using test::kPi;
 using nav::testing::max_abs_diff;
 using nav::testing::numeric_jacobian;
+using test::deg;
+using test::kPi;
 
 constexpr int kSamples = 1000;
 constexpr double kJacobianTol = 1e-6;  // absolute, analytic vs central differences
@@ -67,10 +66,10 @@ TEST(Rotation, ElementaryRotationsAndConventionByHand) {
   EXPECT_LT(max_abs_diff(wing, Vec3(0, std::cos(deg(30)), 0.5)), 1e-15);
   // Matches Eigen's angle-axis composition Rz Ry Rx.
   const Vec3 rpy(0.3, -0.4, 2.0);
-  const Mat3 expected = (Eigen::AngleAxisd(rpy[2], Vec3::UnitZ()) *
-                         Eigen::AngleAxisd(rpy[1], Vec3::UnitY()) *
-                         Eigen::AngleAxisd(rpy[0], Vec3::UnitX()))
-                            .toRotationMatrix();
+  const Mat3 expected =
+      (Eigen::AngleAxisd(rpy[2], Vec3::UnitZ()) * Eigen::AngleAxisd(rpy[1], Vec3::UnitY()) *
+       Eigen::AngleAxisd(rpy[0], Vec3::UnitX()))
+          .toRotationMatrix();
   EXPECT_LT(max_abs_diff(rotation_from_euler(rpy), expected), 1e-15);
   EXPECT_LT(max_abs_diff(rot_x(0.7), Eigen::AngleAxisd(0.7, Vec3::UnitX()).toRotationMatrix()),
             1e-15);
@@ -131,18 +130,18 @@ TEST(Rotation, EulerRateMatrixGivesEulerAngleRates) {
     const Vec3 omega = Vec3::Random();
     const Mat3 R0 = rotation_from_euler(rpy);
     const auto f = [&](const Eigen::VectorXd& t) -> Eigen::VectorXd {
-      return euler_from_rotation(R0 * Eigen::AngleAxisd(t[0] * omega.norm(), omega.normalized())
-                                          .toRotationMatrix());
+      return euler_from_rotation(
+          R0 * Eigen::AngleAxisd(t[0] * omega.norm(), omega.normalized()).toRotationMatrix());
     };
-    const Eigen::MatrixXd N = numeric_jacobian(f, Eigen::VectorXd::Zero(1), 1e-6,
-                                               [](const auto& a, const auto& b) {
-                                                 return test::wrapped_minus(a, b, {0, 1, 2});
-                                               });
+    const Eigen::MatrixXd N =
+        numeric_jacobian(f, Eigen::VectorXd::Zero(1), 1e-6, [](const auto& a, const auto& b) {
+          return test::wrapped_minus(a, b, {0, 1, 2});
+        });
     ASSERT_LT(max_abs_diff(euler_rate_matrix(rpy) * omega, N), kJacobianTol)
         << "rpy " << rpy.transpose();
-    ASSERT_LT(max_abs_diff(euler_rate_matrix(rpy) * euler_rate_matrix_inverse(rpy),
-                           Mat3::Identity()),
-              1e-12);
+    ASSERT_LT(
+        max_abs_diff(euler_rate_matrix(rpy) * euler_rate_matrix_inverse(rpy), Mat3::Identity()),
+        1e-12);
   }
 }
 
@@ -171,8 +170,8 @@ TEST(Rotation, PitchSingularityIsAClearErrorNeverNaN) {
   EXPECT_TRUE(pitch_is_singular(std::numeric_limits<double>::quiet_NaN()));
   EXPECT_TRUE(pitch_is_singular(std::numeric_limits<double>::infinity()));
 
-  for (const double pitch : {kPi / 2, -kPi / 2, deg(89.9), deg(-89.6),
-                             std::numeric_limits<double>::quiet_NaN()}) {
+  for (const double pitch :
+       {kPi / 2, -kPi / 2, deg(89.9), deg(-89.6), std::numeric_limits<double>::quiet_NaN()}) {
     const Vec3 rpy(0.1, pitch, 0.2);
     EXPECT_THROW(euler_rate_matrix(rpy), std::domain_error) << pitch;
     EXPECT_THROW(dJ2_droll(rpy), std::domain_error) << pitch;

@@ -18,8 +18,9 @@ bool pitch_is_singular(double pitch_rad) {
 void require_regular_pitch(double pitch_rad, const char* where) {
   if (!pitch_is_singular(pitch_rad)) return;
   std::ostringstream msg;
-  msg << std::setprecision(10) << where << ": pitch " << pitch_rad << " rad (" << pitch_rad * 180.0 / std::numbers::pi
-      << " deg) is beyond +-" << kMaxAbsPitchRad * 180.0 / std::numbers::pi
+  msg << std::setprecision(10) << where << ": pitch " << pitch_rad << " rad ("
+      << pitch_rad * 180.0 / std::numbers::pi << " deg) is beyond +-"
+      << kMaxAbsPitchRad * 180.0 / std::numbers::pi
       << " deg, where the Euler-angle rate matrix is singular";
   throw std::domain_error(msg.str());
 }
@@ -54,9 +55,7 @@ Mat3 rot_z(double a) {
   return R;
 }
 
-Mat3 rotation_from_euler(const Vec3& rpy) {
-  return rot_z(rpy[2]) * rot_y(rpy[1]) * rot_x(rpy[0]);
-}
+Mat3 rotation_from_euler(const Vec3& rpy) { return rot_z(rpy[2]) * rot_y(rpy[1]) * rot_x(rpy[0]); }
 
 Vec3 euler_from_rotation(const Mat3& R) {
   // R(2,0) = -sin(pitch); clamp guards |R(2,0)| slightly above 1 from rounding.

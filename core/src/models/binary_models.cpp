@@ -3,11 +3,11 @@
 
 #include "nav/core/models/binary_models.h"
 
-#include "nav/core/geometry/pose.h"
-
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+
+#include "nav/core/geometry/pose.h"
 
 namespace nav::core {
 namespace {
@@ -59,8 +59,8 @@ bool CameraRelativePoseModel::baseline_is_degenerate(
 }
 
 MeasVec CameraRelativePoseModel::predict(const Eigen::Ref<const Eigen::VectorXd>& x_a,
-                                         const Eigen::Ref<const Eigen::VectorXd>& x_b,
-                                         MeasJac* H_a, MeasJac* H_b) const {
+                                         const Eigen::Ref<const Eigen::VectorXd>& x_b, MeasJac* H_a,
+                                         MeasJac* H_b) const {
   require_block_size(x_a.size(), false, "CameraRelativePoseModel");
   require_block_size(x_b.size(), false, "CameraRelativePoseModel");
   require_same_size(x_a.size(), x_b.size(), "CameraRelativePoseModel");

@@ -2,11 +2,11 @@
 
 #include "nav/core/models/constant_velocity.h"
 
-#include "nav/core/geometry/rotation.h"
-
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+
+#include "nav/core/geometry/rotation.h"
 
 namespace nav::core {
 namespace {
@@ -14,8 +14,7 @@ namespace {
 void require_valid_dt(double dt_s, const char* where) {
   if (std::isfinite(dt_s) && dt_s > 0.0) return;
   std::ostringstream msg;
-  msg << "ConstantVelocityModel::" << where << ": dt_s = " << dt_s
-      << " s, expected finite and > 0";
+  msg << "ConstantVelocityModel::" << where << ": dt_s = " << dt_s << " s, expected finite and > 0";
   throw std::invalid_argument(msg.str());
 }
 

@@ -2,9 +2,9 @@
 
 #include "nav/core/models/unary_models.h"
 
-#include "nav/core/geometry/rotation.h"
-
 #include <Eigen/Geometry>
+
+#include "nav/core/geometry/rotation.h"
 
 namespace nav::core {
 namespace {

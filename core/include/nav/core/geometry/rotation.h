@@ -14,9 +14,9 @@
 // pitch_is_singular(pitch), i.e. |pitch| > kMaxAbsPitchRad. They never return NaN. Callers on
 // the real-time path check pitch_is_singular() first and report StatusCode::kOutOfRange.
 
-#include "nav/core/geometry/types.h"
-
 #include <numbers>
+
+#include "nav/core/geometry/types.h"
 
 namespace nav::core {
 

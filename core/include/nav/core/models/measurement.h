@@ -17,7 +17,6 @@
 // A state of the wrong size is a programming error: std::invalid_argument naming the model.
 
 #include <Eigen/Core>
-
 #include <array>
 #include <cstddef>
 
