@@ -228,6 +228,20 @@ TEST(RelativePose6Model, EqualsTailToTailAndJacobianMatchesNumeric) {
   EXPECT_THROW((void)model.predict(Vec12::Zero(), Vec6::Zero()), std::invalid_argument);
 }
 
+TEST(RelativePose6Model, SingularRelativePitchThrowsOnlyForJacobians) {
+  const RelativePose6Model model;
+  const Vec6 a = pose(1, 2, 3, 0, deg(-10), 0.2);
+  const Vec6 b = head_to_tail(a, pose(2, 0, 0, 0.3, kPi / 2, 0));  // relative pitch 90 deg
+  const MeasVec z = model.predict(a, b);
+  EXPECT_TRUE(z.allFinite());
+  EXPECT_NEAR(z[4], kPi / 2, 1e-7);
+  MeasJac H_a, H_b;
+  EXPECT_THROW((void)model.predict(a, b, &H_a, &H_b), std::domain_error);
+  CameraRelativePoseModel camera;
+  EXPECT_TRUE(camera.predict(a, b).allFinite());
+  EXPECT_THROW((void)camera.predict(a, b, &H_a, &H_b), std::domain_error);
+}
+
 // ---------------------------------------------------------------- camera
 
 TEST(CameraRelativePoseModel, AzimuthElevationOfKnownBaselines) {
