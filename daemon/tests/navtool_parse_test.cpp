@@ -80,6 +80,7 @@ TEST(NavtoolParse, Pd0RealRecordingOneLinePerEnsembleAndSummary) {
   EXPECT_NEAR(first["depth_m"].get<double>(), 0.2, 0.05);
   EXPECT_NEAR(first["pressure_dbar"].get<double>(), 0.255, 5e-4);
   EXPECT_EQ(first["coord_frame"], "earth");
+  EXPECT_EQ(first["has_bottom_track"], true);
   ASSERT_EQ(first["bt_velocity_mps"].size(), 4u);
   for (const auto& v : first["bt_velocity_mps"]) EXPECT_TRUE(v.is_null());
 

@@ -74,13 +74,11 @@ json pd0_to_json(const drivers::Pd0Ensemble& e) {
   j["coord_frame"] = drivers::to_string(e.coord_frame());
   j["num_beams"] = e.fixed.num_beams;
   j["num_cells"] = e.fixed.num_cells;
-  if (e.bottom_track) {
-    j["bt_velocity_mps"] = opt_array(e.bottom_track->velocity_mps);
-    j["bt_range_m"] = opt_array(e.bottom_track->range_m);
-  } else {
-    j["bt_velocity_mps"] = nullptr;
-    j["bt_range_m"] = nullptr;
-  }
+  // Always 4 values (null when invalid or when the ensemble has no bottom-track type).
+  const drivers::Pd0BottomTrack bt = e.bottom_track.value_or(drivers::Pd0BottomTrack{});
+  j["has_bottom_track"] = e.bottom_track.has_value();
+  j["bt_velocity_mps"] = opt_array(bt.velocity_mps);
+  j["bt_range_m"] = opt_array(bt.range_m);
   j["skipped_types"] = e.skipped_type_ids;
   return j;
 }

@@ -82,8 +82,10 @@ struct Pd0Ensemble {
   Timestamps time;
   uint32_t ensemble_number = 0;  ///< LSB word + MSB byte * 65536
   Pd0FixedLeader fixed;
-  std::optional<double> heading_rad;      ///< [0, 2pi), 0.01 deg on the wire (EH)
-  std::optional<double> pitch_rad;        ///< tilt 1, [-pi/2, pi/2], 0.01 deg signed (EP)
+  std::optional<double> heading_rad;  ///< [0, 2pi), 0.01 deg on the wire (EH)
+  /// Tilt 1 as reported, [-pi/2, pi/2], 0.01 deg signed (EP); not converted to "real pitch"
+  /// (the manual's atan(tan(tilt1) cos(tilt2))) nor corrected for an up-looking instrument.
+  std::optional<double> pitch_rad;
   std::optional<double> roll_rad;         ///< tilt 2, [-pi/2, pi/2], 0.01 deg signed (ER)
   std::optional<double> temperature_c;    ///< 0.01 degC signed (ET)
   std::optional<double> salinity_ppt;     ///< ppt (ES)
