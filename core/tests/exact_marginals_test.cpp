@@ -100,7 +100,19 @@ TEST(ExactMarginals, RandomSparseMatchesDenseInverse) {
     const auto A = random_block_spd(c.blocks, c.d, c.extra, 17u + c.blocks);
     expect_matches_dense(A, c.d, MarginalsOrdering::kBlockAmd, 1e-10);
     expect_matches_dense(A, c.d, MarginalsOrdering::kCholmodAuto, 1e-10);
+    expect_matches_dense(A, c.d, MarginalsOrdering::kBlockMetis, 1e-10);
   }
+}
+
+TEST(ExactMarginals, DenseMatrixIsOneLargeSupernode) {
+  // A fully dense 150 x 150 SPD matrix: one supernode, so the recursive triangular inverse
+  // and Gram kernels run through several levels (150 -> 75 -> 37 -> 18).
+  std::mt19937 rng(23);
+  std::normal_distribution<double> normal;
+  Eigen::MatrixXd M(150, 150);
+  for (int k = 0; k < M.size(); ++k) M.data()[k] = normal(rng);
+  const Eigen::MatrixXd A = M * M.transpose() + 10.0 * Eigen::MatrixXd::Identity(150, 150);
+  expect_matches_dense(A.sparseView(), 5, MarginalsOrdering::kBlockAmd, 1e-11);
 }
 
 TEST(ExactMarginals, JointOfArbitraryPairsInAndOutOfPattern) {
@@ -143,6 +155,23 @@ void expect_graph_matches_dense(const std::filesystem::path& path) {
   const PoseGraph graph = read_g2o(path.string());
   const auto A = assemble_information_sparse(graph);
   expect_matches_dense(A, 6, MarginalsOrdering::kBlockAmd, 1e-9);
+}
+
+TEST(ExactMarginals, SmallGrid3DJointsOfArbitraryPairs) {
+  NAV_REQUIRE_DATA(path, "posegraphs/smallGrid3D.g2o");
+  const auto A = assemble_information_sparse(read_g2o(path.string()));
+  const ExactMarginals em = ExactMarginals::compute(A, 6);
+  const Eigen::MatrixXd S = dense_inverse(A);
+  const double tol = 1e-9 * S.cwiseAbs().maxCoeff();
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> pick(0, em.num_blocks() - 1);
+  for (int k = 0; k < 40; ++k) {
+    const int a = pick(rng), b = pick(rng);
+    Eigen::MatrixXd expected(12, 12);
+    expected << S.block(a * 6, a * 6, 6, 6), S.block(a * 6, b * 6, 6, 6),
+        S.block(b * 6, a * 6, 6, 6), S.block(b * 6, b * 6, 6, 6);
+    EXPECT_LE(max_abs_diff(em.joint(a, b), expected), tol) << "pair " << a << ", " << b;
+  }
 }
 
 TEST(ExactMarginals, TinyGrid3DAllBlocksMatchDenseInverse) {
