@@ -155,7 +155,7 @@ TEST_F(NavtoolParseCan, DecodesSimulatedDvlAndFogLog) {
       "time of validity from a 50 ppm ms counter, 0.5 ms + Exp(2 ms) log latency: "
       "max |error| %.0f us\n",
       max_tov_error_s * 1e6);
-  // Latency floor (0.5 ms) is not known to navtool; the 1 ms counter resolution adds up to 1 ms.
+  // The 0.5 ms latency floor is not known to navtool; the 1 ms counter resolution adds ±0.5 ms.
   EXPECT_LT(max_tov_error_s, 2.0e-3);
   const json& fog = r.records.back();
   EXPECT_EQ(fog["id"], "0x18FF1001");

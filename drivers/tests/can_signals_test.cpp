@@ -282,6 +282,9 @@ TEST(CanSignals, TimeCounterModulus) {
   EXPECT_EQ(can_time_signal_modulus_us(us), int64_t{1} << 32);
   EXPECT_FALSE(can_time_signal_modulus_us(sig("x", 0, 8, kIntel, false, 1.0, 0.0, "m")));
   EXPECT_FALSE(can_time_signal_modulus_us(sig("x", 0, 8, kIntel, true, 1.0, 0.0, "ms")));
+  EXPECT_EQ(can_time_signal_resolution_us(ms), 1000);
+  EXPECT_EQ(can_time_signal_resolution_us(sig("t", 0, 8, kIntel, false, 0.1, 0.0, "s")), 100'000);
+  EXPECT_EQ(can_time_signal_resolution_us(sig("x", 0, 8, kIntel, false, 1.0, 0.0, "m")), 0);
 }
 
 TEST(CanSignals, ValidationNamesThePathAndReason) {

@@ -108,7 +108,9 @@ TEST(ClockMapping, SixteenBitMillisecondCounterWraps) {
   sensor.tick_us = 1000;
   sensor.modulus_us = 65'536'000;
   sensor.s0_us = 60'000'000;  // first wrap after 5.5 s
-  ClockMapping mapping(options_for(sensor));
+  ClockMappingOptions options = options_for(sensor);
+  options.sensor_resolution_us = 1000;  // the counter truncates to whole milliseconds
+  ClockMapping mapping(options);
   std::mt19937_64 rng(3);
   std::exponential_distribution<double> jitter(1.0 / 3000.0);
   const ErrorStats e = run(mapping, sensor, 400.0, 20.0, [&] { return jitter(rng); });
@@ -116,7 +118,10 @@ TEST(ClockMapping, SixteenBitMillisecondCounterWraps) {
               e.max_abs_us, e.rms_us, static_cast<unsigned long long>(mapping.stats().wraps));
   EXPECT_EQ(mapping.stats().wraps, 7u);
   EXPECT_EQ(mapping.stats().resets, 0u);
-  EXPECT_LT(e.max_abs_us, 1500.0);  // includes the 1 ms counter resolution
+  // The 1 ms truncation dominates: ±0.5 ms, and its pattern (5 µs more per sample at 50 ppm,
+  // a 20 s sawtooth) tilts the drift estimate while the window holds few of its periods.
+  EXPECT_LT(e.max_abs_us, 1600.0);
+  EXPECT_LT(e.rms_us, 400.0);
 }
 
 TEST(ClockMapping, LongGapIsUnwrappedWithTheHostClock) {

@@ -79,6 +79,7 @@ class SensorClocks {
         if (!s.time_of_validity) continue;
         drivers::ClockMappingOptions o;
         o.sensor_modulus_us = drivers::can_time_signal_modulus_us(s).value_or(0);
+        o.sensor_resolution_us = drivers::can_time_signal_resolution_us(s);
         // Short counters (e.g. 16-bit ms: 65 s) need a threshold below half their period.
         if (o.sensor_modulus_us > 0) {
           o.jump_threshold_us = std::min(o.jump_threshold_us, o.sensor_modulus_us / 4);

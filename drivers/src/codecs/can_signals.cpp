@@ -220,6 +220,13 @@ std::optional<int64_t> can_time_signal_modulus_us(const CanSignalSpec& s) {
   return std::llround(period_us);
 }
 
+int64_t can_time_signal_resolution_us(const CanSignalSpec& s) {
+  const std::optional<CanUnitConversion> unit = can_unit_to_si(s.unit);
+  if (!unit || unit->si_unit != "s") return 0;
+  const double step_us = std::abs(s.scale) * unit->factor * 1e6;
+  return step_us >= 1.0 && step_us < 1e12 ? std::llround(step_us) : 0;
+}
+
 uint32_t can_signal_end_byte(const CanSignalSpec& s) {
   const uint32_t last = s.byte_order == CanByteOrder::kIntel
                             ? s.start_bit + s.length - 1

@@ -24,6 +24,7 @@ CanFrameDecoder::CanFrameDecoder(std::vector<CanMessageSpec> messages, ClockMapp
       if (!s.time_of_validity) continue;
       ClockMappingOptions o = clock;
       o.sensor_modulus_us = can_time_signal_modulus_us(s).value_or(0);
+      o.sensor_resolution_us = can_time_signal_resolution_us(s);
       if (o.sensor_modulus_us > 0 && o.jump_threshold_us >= o.sensor_modulus_us / 2) {
         o.jump_threshold_us = o.sensor_modulus_us / 4;  // short counters, e.g. 16-bit ms
       }

@@ -34,6 +34,8 @@ std::string ClockMappingOptions::validate() const {
   } else if (sensor_modulus_us > 0 && jump_threshold_us >= sensor_modulus_us / 2) {
     e << "jump_threshold_us: " << jump_threshold_us << " must be below half the sensor modulus ("
       << sensor_modulus_us / 2 << ")";
+  } else if (sensor_resolution_us < 0) {
+    e << "sensor_resolution_us: " << sensor_resolution_us << " must be >= 0";
   } else if (reset_confirm_samples < 1) {
     e << "reset_confirm_samples: must be >= 1";
   }
@@ -217,8 +219,9 @@ std::optional<int64_t> ClockMapping::to_host_us(int64_t sensor_us) const {
   constexpr int64_t kLimit = int64_t{1} << 53;
   if (std::abs(sensor_us) >= kLimit) return std::nullopt;
   const int64_t s = unwrap(sensor_us, window_.back().sensor_us);
-  const double host =
-      static_cast<double>(s) + envelope_at(s) - static_cast<double>(options_.fixed_latency_us);
+  const double host = static_cast<double>(s) + envelope_at(s) -
+                      static_cast<double>(options_.fixed_latency_us) +
+                      0.5 * static_cast<double>(options_.sensor_resolution_us);
   if (!(std::abs(host) < static_cast<double>(kLimit))) return std::nullopt;
   return std::llround(host);
 }

@@ -92,6 +92,10 @@ uint32_t can_signal_end_byte(const CanSignalSpec& signal);
 /// nullopt for other signals or a period beyond 2^62 µs.
 std::optional<int64_t> can_time_signal_modulus_us(const CanSignalSpec& signal);
 
+/// One raw step of a time signal in whole µs (e.g. 1000 for a millisecond counter), 0 when it
+/// is not a time signal or the step is below 1 µs: a ClockMapping's sensor_resolution_us.
+int64_t can_time_signal_resolution_us(const CanSignalSpec& signal);
+
 /// One decoded signal value.
 struct CanSignalValue {
   const CanSignalSpec* spec = nullptr;  ///< into the CanSignalDecoder's table

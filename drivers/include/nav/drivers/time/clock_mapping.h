@@ -48,6 +48,9 @@ struct ClockMappingOptions {
   size_t reset_confirm_samples = 3;
   /// Known constant part of the latency (µs), subtracted from mapped times.
   int64_t fixed_latency_us = 0;
+  /// Resolution of the sensor time (µs), e.g. 1000 for a millisecond counter that truncates:
+  /// the true time lies in [reading, reading + resolution), so mapped times add half of it.
+  int64_t sensor_resolution_us = 0;
 
   /// Empty when valid, else the first problem with the field name.
   std::string validate() const;
