@@ -1,0 +1,149 @@
+#pragma once
+// navd configuration (YAML, yaml-cpp): the typed NavdConfig and its loader. Every key is
+// documented in config/README.md; config/sim.yaml and config/rov.yaml are complete examples.
+//
+// Start-up contract (ARCHITECTURE.md): unknown keys, wrong types, out-of-range values and missing
+// required keys stop start-up with a ConfigError naming the key path and the reason, e.g.
+//   "rov.yaml: sensors[2].transport.baud: 12345 is not a standard baud rate (1200 ... 921600)".
+// Units at this edge: angles in degrees (keys end in _deg), everything stored in SI / radians.
+// Noise defaults are Table II of Eustice et al., "Visually Navigating the RMS Titanic with SLAM
+// Information Filters" (RSS 2005): roll/pitch 0.1 deg, heading 0.1 deg, body velocities
+// 0.01 m/s, depth 0.01 m, altitude 0.1 m (1 sigma).
+
+#include <array>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "nav/core/models/constant_velocity.h"
+
+namespace nav::daemon {
+
+/// A configuration error: `key_path()` is the YAML path ("sensors[2].transport.baud", "" for the
+/// document root), `reason()` what is wrong; what() = "<source>: <key_path>: <reason>".
+class ConfigError : public std::runtime_error {
+ public:
+  ConfigError(const std::string& source, std::string key_path, std::string reason);
+  const std::string& key_path() const { return key_path_; }
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::string key_path_;
+  std::string reason_;
+};
+
+enum class SensorType {
+  kDvlPd0,        ///< "dvl_pd0": Teledyne RDI PD0 binary ensembles
+  kDvlPd6,        ///< "dvl_pd6": PD6 ASCII
+  kDvlCan,        ///< "dvl_can": DVL on CAN with a signal table
+  kHeadingNmea,   ///< "heading_nmea": NMEA 0183 attitude/heading
+  kFogKvh,        ///< "fog_kvh": KVH fibre-optic gyro
+  kPressureParo,  ///< "pressure_paro": Paroscientific depth sensor
+  kAltimeter,     ///< "altimeter"
+  kCameraGige,    ///< "camera_gige": GigE Vision camera (Aravis)
+  kCameraV4l2,    ///< "camera_v4l2": V4L2 camera
+};
+const char* to_string(SensorType type);
+bool is_camera(SensorType type);
+
+enum class Parity { kNone, kEven, kOdd };
+enum class FlowControl { kNone, kRtsCts, kXonXoff };
+
+struct SerialTransport {
+  std::string device;                     ///< required, e.g. /dev/ttyUSB0
+  int baud = 115200;                      ///< standard rate 1200 ... 921600
+  Parity parity = Parity::kNone;          ///< none | even | odd
+  FlowControl flow = FlowControl::kNone;  ///< none | rtscts | xonxoff
+};
+struct CanTransport {
+  std::string interface;     ///< required, e.g. can0
+  std::string signals_file;  ///< required, CAN signal table (config/can/*.yaml)
+};
+struct GigeTransport {
+  std::string camera_id;  ///< required, Aravis device id
+};
+struct V4l2Transport {
+  std::string device;  ///< required, e.g. /dev/video0
+};
+/// Data produced by navd's built-in survey simulator (no device).
+struct SimTransport {};
+using Transport =
+    std::variant<SerialTransport, CanTransport, GigeTransport, V4l2Transport, SimTransport>;
+
+/// Fixed sensor mount: R_body_sensor from Z-Y-X Euler angles, lever arm p_body_sensor_m.
+struct Mount {
+  std::array<double, 3> rpy_rad{0.0, 0.0, 0.0};      ///< YAML rotation_deg, each in [-360, 360]
+  std::array<double, 3> lever_arm_m{0.0, 0.0, 0.0};  ///< YAML lever_arm_m, each |.| <= 100 m
+};
+
+/// 1-sigma measurement noise (Table II defaults). Each sensor type accepts only its own keys.
+struct NoiseSigmas {
+  double roll_pitch_rad = 0.1 * 3.14159265358979323846 / 180.0;  ///< roll_pitch_deg
+  double heading_rad = 0.1 * 3.14159265358979323846 / 180.0;     ///< heading_deg
+  double velocity_mps = 0.01;                                    ///< velocity_mps
+  double depth_m = 0.01;                                         ///< depth_m
+  double altitude_m = 0.1;                                       ///< altitude_m
+  double pixel_px = 1.0;                                         ///< pixel_px (cameras)
+};
+
+enum class PixelFormat { kMono8, kMono12, kMono16, kBayerRg8, kRgb8 };
+enum class Trigger { kFreeRun, kSoftware, kHardware };
+
+/// Pinhole calibration with OpenCV distortion order (k1 k2 p1 p2 [k3 [k4 k5 k6]]).
+struct CameraConfig {
+  double fx_px = 0.0, fy_px = 0.0;  ///< required, > 0
+  double cx_px = 0.0, cy_px = 0.0;  ///< required, >= 0
+  std::vector<double> distortion;   ///< 0, 4, 5 or 8 coefficients
+  PixelFormat pixel_format = PixelFormat::kMono8;
+  Trigger trigger = Trigger::kFreeRun;
+  double frame_rate_hz = 1.0;  ///< images per second (0, 100]
+};
+
+struct SensorConfig {
+  std::string name;  ///< required, unique
+  SensorType type = SensorType::kDvlPd0;
+  Transport transport = SimTransport{};
+  Mount mount;
+  NoiseSigmas noise;
+  CameraConfig camera;  ///< required block for camera_* types, forbidden otherwise
+};
+
+struct FilterConfig {
+  core::ConstantVelocityOptions process_noise;  ///< process_noise_psd.{accel, angular_accel}
+  int cg_iterations_per_step = 5;               ///< [1, 1000]
+  double latency_window_ms = 200.0;             ///< [0, 60000]
+  double gating_chi2_threshold = 16.81;         ///< (0, 1e6]; 16.81 = chi2(6 dof, 99 %)
+};
+
+struct LcmChannel {
+  std::string name;      ///< channel name, non-empty
+  double rate_hz = 1.0;  ///< publish rate (0, 1000]
+};
+struct LcmConfig {
+  std::string url = "udpm://239.255.76.67:7667?ttl=0";
+  LcmChannel nav_solution{"NAVD_SOLUTION", 10.0};
+  LcmChannel health{"NAVD_HEALTH", 1.0};
+  LcmChannel bounds{"NAVD_BOUNDS", 0.2};
+};
+
+struct CheckpointConfig {
+  std::string path = "/var/lib/navd/checkpoints";  ///< directory
+  double period_s = 60.0;                          ///< (0, 86400]
+  int keep = 3;                                    ///< newest K kept, [1, 100]
+};
+
+struct NavdConfig {
+  std::vector<SensorConfig> sensors;  ///< required, at least one
+  FilterConfig filter;
+  LcmConfig lcm;
+  CheckpointConfig checkpoint;
+};
+
+/// Parses YAML text; `source` names it in errors. Throws ConfigError.
+NavdConfig parse_config(const std::string& yaml_text, const std::string& source = "<string>");
+/// Reads and parses a file (errors name the file). Throws ConfigError, also if unreadable.
+NavdConfig load_config_file(const std::string& path);
+
+}  // namespace nav::daemon

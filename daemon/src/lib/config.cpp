@@ -1,0 +1,150 @@
+// navd config: ConfigError, the top-level document and the filter / lcm / checkpoint sections.
+// Schema in config.h and config/README.md.
+#include <fstream>
+#include <sstream>
+
+#include "config_sections.h"
+
+namespace nav::daemon {
+namespace {
+
+using detail::YamlReader;
+
+std::string error_text(const std::string& source, const std::string& key_path,
+                       const std::string& reason) {
+  return source + ": " + (key_path.empty() ? "<root>" : key_path) + ": " + reason;
+}
+
+core::Vec3 read_psd(const YamlReader& r) {
+  const std::vector<YamlReader> items = r.elements();
+  if (items.size() != 3) r.fail("expected 3 numbers, got " + std::to_string(items.size()));
+  core::Vec3 out;
+  for (int i = 0; i < 3; ++i) {
+    const double v = items[static_cast<std::size_t>(i)].as_double();
+    if (v < 0.0 || v > 1e3)
+      items[static_cast<std::size_t>(i)].fail(std::to_string(v) + " is not in [0, 1000]");
+    out[i] = v;
+  }
+  return out;
+}
+
+FilterConfig parse_filter(const YamlReader& f) {
+  f.expect_map({"process_noise_psd", "cg_iterations_per_step", "latency_window_ms",
+                "gating_chi2_threshold"});
+  FilterConfig filter;
+  if (f.has("process_noise_psd")) {
+    const YamlReader p = f.at("process_noise_psd");
+    p.expect_map({"accel_m2ps3", "angular_accel_rad2ps3"});
+    if (p.has("accel_m2ps3")) filter.process_noise.accel_psd = read_psd(p.at("accel_m2ps3"));
+    if (p.has("angular_accel_rad2ps3")) {
+      filter.process_noise.angular_accel_psd = read_psd(p.at("angular_accel_rad2ps3"));
+    }
+  }
+  f.read("cg_iterations_per_step", filter.cg_iterations_per_step, 1, 1000);
+  f.read("latency_window_ms", filter.latency_window_ms, 0.0, 60000.0);
+  f.read("gating_chi2_threshold", filter.gating_chi2_threshold, 1e-6, 1e6);
+  if (f.has("gating_chi2_threshold") && filter.gating_chi2_threshold <= 0.0) {
+    f.at("gating_chi2_threshold").fail("must be > 0");
+  }
+  return filter;
+}
+
+void parse_channel(const YamlReader& parent, std::string_view key, LcmChannel& out) {
+  if (!parent.has(key)) return;
+  const YamlReader c = parent.at(key);
+  c.expect_map({"name", "rate_hz"});
+  c.read("name", out.name);
+  c.read("rate_hz", out.rate_hz, 1e-3, 1000.0);
+}
+
+LcmConfig parse_lcm(const YamlReader& l) {
+  l.expect_map({"url", "channels"});
+  LcmConfig lcm;
+  l.read("url", lcm.url);
+  const std::string_view schemes[] = {"udpm://", "file://", "memq://"};
+  bool known = false;
+  for (std::string_view s : schemes) known = known || lcm.url.rfind(s, 0) == 0;
+  if (!known) l.at("url").fail("'" + lcm.url + "' must start with udpm://, file:// or memq://");
+  if (l.has("channels")) {
+    const YamlReader c = l.at("channels");
+    c.expect_map({"nav_solution", "health", "bounds"});
+    parse_channel(c, "nav_solution", lcm.nav_solution);
+    parse_channel(c, "health", lcm.health);
+    parse_channel(c, "bounds", lcm.bounds);
+  }
+  return lcm;
+}
+
+CheckpointConfig parse_checkpoint(const YamlReader& c) {
+  c.expect_map({"path", "period_s", "keep"});
+  CheckpointConfig checkpoint;
+  c.read("path", checkpoint.path);
+  c.read("period_s", checkpoint.period_s, 1e-3, 86400.0);
+  c.read("keep", checkpoint.keep, 1, 100);
+  return checkpoint;
+}
+
+}  // namespace
+
+ConfigError::ConfigError(const std::string& source, std::string key_path, std::string reason)
+    : std::runtime_error(error_text(source, key_path, reason)),
+      key_path_(std::move(key_path)),
+      reason_(std::move(reason)) {}
+
+const char* to_string(SensorType type) {
+  switch (type) {
+    case SensorType::kDvlPd0:
+      return "dvl_pd0";
+    case SensorType::kDvlPd6:
+      return "dvl_pd6";
+    case SensorType::kDvlCan:
+      return "dvl_can";
+    case SensorType::kHeadingNmea:
+      return "heading_nmea";
+    case SensorType::kFogKvh:
+      return "fog_kvh";
+    case SensorType::kPressureParo:
+      return "pressure_paro";
+    case SensorType::kAltimeter:
+      return "altimeter";
+    case SensorType::kCameraGige:
+      return "camera_gige";
+    case SensorType::kCameraV4l2:
+      return "camera_v4l2";
+  }
+  return "unknown";
+}
+
+bool is_camera(SensorType type) {
+  return type == SensorType::kCameraGige || type == SensorType::kCameraV4l2;
+}
+
+NavdConfig parse_config(const std::string& yaml_text, const std::string& source) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(source, "",
+                      "YAML syntax error at line " + std::to_string(e.mark.line + 1) + ", column " +
+                          std::to_string(e.mark.column + 1) + ": " + e.msg);
+  }
+  const YamlReader doc(root, "", &source);
+  doc.expect_map({"sensors", "filter", "lcm", "checkpoint"});
+  NavdConfig config;
+  config.sensors = detail::parse_sensors(doc.at("sensors"));
+  if (doc.has("filter")) config.filter = parse_filter(doc.at("filter"));
+  if (doc.has("lcm")) config.lcm = parse_lcm(doc.at("lcm"));
+  if (doc.has("checkpoint")) config.checkpoint = parse_checkpoint(doc.at("checkpoint"));
+  return config;
+}
+
+NavdConfig load_config_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError(path, "", "cannot open file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw ConfigError(path, "", "read error");
+  return parse_config(text.str(), path);
+}
+
+}  // namespace nav::daemon

@@ -1,0 +1,234 @@
+// navd config loader: sim.yaml / rov.yaml load cleanly; unknown keys, wrong types, out-of-range
+// values and missing required keys stop with the key path and the reason.
+#include "nav/daemon/config.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+#include <string>
+
+namespace nav::daemon {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+std::filesystem::path config_dir() {
+  return std::filesystem::path(__FILE__).parent_path().parent_path().parent_path() / "config";
+}
+
+const char* kMinimal = R"(
+sensors:
+  - name: dvl
+    type: dvl_pd0
+    transport: {type: serial, device: /dev/ttyUSB0}
+)";
+
+/// Parses `yaml` expecting a ConfigError; returns it.
+ConfigError expect_error(const std::string& yaml) {
+  try {
+    parse_config(yaml, "test.yaml");
+  } catch (const ConfigError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no ConfigError for:\n" << yaml;
+  return ConfigError("", "", "");
+}
+
+TEST(Config, MinimalTakesTableTwoDefaults) {
+  const NavdConfig c = parse_config(kMinimal);
+  ASSERT_EQ(c.sensors.size(), 1u);
+  const SensorConfig& s = c.sensors[0];
+  EXPECT_EQ(s.name, "dvl");
+  EXPECT_EQ(s.type, SensorType::kDvlPd0);
+  const auto* serial = std::get_if<SerialTransport>(&s.transport);
+  ASSERT_NE(serial, nullptr);
+  EXPECT_EQ(serial->device, "/dev/ttyUSB0");
+  EXPECT_EQ(serial->baud, 115200);
+  EXPECT_NEAR(s.noise.roll_pitch_rad, 0.1 * kDeg, 1e-15);
+  EXPECT_NEAR(s.noise.heading_rad, 0.1 * kDeg, 1e-15);
+  EXPECT_DOUBLE_EQ(s.noise.velocity_mps, 0.01);
+  EXPECT_DOUBLE_EQ(s.noise.depth_m, 0.01);
+  EXPECT_DOUBLE_EQ(s.noise.altitude_m, 0.1);
+  EXPECT_DOUBLE_EQ(c.filter.latency_window_ms, 200.0);
+  EXPECT_EQ(c.checkpoint.keep, 3);
+}
+
+TEST(Config, SimYamlLoads) {
+  const NavdConfig c = load_config_file((config_dir() / "sim.yaml").string());
+  ASSERT_EQ(c.sensors.size(), 5u);
+  for (const SensorConfig& s : c.sensors) {
+    EXPECT_TRUE(std::holds_alternative<SimTransport>(s.transport)) << s.name;
+  }
+  EXPECT_NEAR(c.sensors[0].mount.rpy_rad[2], 45.0 * kDeg, 1e-12);
+  EXPECT_DOUBLE_EQ(c.sensors[0].mount.lever_arm_m[0], 0.5);
+  const SensorConfig& cam = c.sensors[4];
+  EXPECT_EQ(cam.type, SensorType::kCameraGige);
+  EXPECT_DOUBLE_EQ(cam.camera.fx_px, 1600.0);
+  EXPECT_EQ(cam.camera.distortion.size(), 5u);
+  EXPECT_EQ(cam.camera.pixel_format, PixelFormat::kMono12);
+  EXPECT_EQ(cam.camera.trigger, Trigger::kSoftware);
+  EXPECT_EQ(c.lcm.url, "memq://");
+  EXPECT_DOUBLE_EQ(c.filter.process_noise.accel_psd[1], 1e-3);
+  EXPECT_TRUE(c.filter.process_noise.validate().ok());
+}
+
+TEST(Config, RovYamlLoads) {
+  const NavdConfig c = load_config_file((config_dir() / "rov.yaml").string());
+  ASSERT_EQ(c.sensors.size(), 7u);
+  const auto* fog = std::get_if<SerialTransport>(&c.sensors[2].transport);
+  ASSERT_NE(fog, nullptr);
+  EXPECT_EQ(fog->baud, 921600);
+  EXPECT_EQ(fog->flow, FlowControl::kRtsCts);
+  const auto* can = std::get_if<CanTransport>(&c.sensors[5].transport);
+  ASSERT_NE(can, nullptr);
+  EXPECT_EQ(can->interface, "can0");
+  const auto* gige = std::get_if<GigeTransport>(&c.sensors[6].transport);
+  ASSERT_NE(gige, nullptr);
+  EXPECT_EQ(c.sensors[6].camera.trigger, Trigger::kHardware);
+  EXPECT_EQ(c.checkpoint.keep, 5);
+  EXPECT_DOUBLE_EQ(c.filter.latency_window_ms, 250.0);
+}
+
+TEST(Config, WrongBaudNamesTheKeyPath) {
+  const ConfigError e = expect_error(R"(
+sensors:
+  - {name: a, type: altimeter, transport: {type: sim}}
+  - {name: b, type: altimeter, transport: {type: sim}}
+  - name: c
+    type: pressure_paro
+    transport: {type: serial, device: /dev/ttyS0, baud: 12345}
+)");
+  EXPECT_EQ(e.key_path(), "sensors[2].transport.baud");
+  EXPECT_NE(e.reason().find("12345 is not a standard baud rate"), std::string::npos) << e.what();
+  EXPECT_EQ(std::string(e.what()).rfind("test.yaml: sensors[2].transport.baud: ", 0), 0u)
+      << e.what();
+}
+
+TEST(Config, UnknownKeysAreErrorsAtEveryLevel) {
+  EXPECT_EQ(expect_error(std::string(kMinimal) + "filtr: {}\n").key_path(), "filtr");
+  EXPECT_EQ(expect_error(std::string(kMinimal) + "filter: {latency_ms: 3}\n").key_path(),
+            "filter.latency_ms");
+  EXPECT_EQ(expect_error(R"(
+sensors:
+  - {name: d, type: dvl_pd0, transport: {type: serial, device: /dev/x, bauds: 9600}}
+)")
+                .key_path(),
+            "sensors[0].transport.bauds");
+  const ConfigError e = expect_error(R"(
+sensors:
+  - {name: d, type: dvl_pd0, transport: {type: sim}, noise: {depth_m: 0.1}}
+)");
+  EXPECT_EQ(e.key_path(), "sensors[0].noise.depth_m");
+  EXPECT_NE(e.reason().find("unknown key (allowed: velocity_mps)"), std::string::npos) << e.what();
+}
+
+TEST(Config, WrongTypes) {
+  ConfigError e = expect_error(std::string(kMinimal) + "filter: {cg_iterations_per_step: 2.5}\n");
+  EXPECT_EQ(e.key_path(), "filter.cg_iterations_per_step");
+  EXPECT_NE(e.reason().find("expected an integer, got '2.5'"), std::string::npos) << e.what();
+  e = expect_error(std::string(kMinimal) + "filter: {latency_window_ms: soon}\n");
+  EXPECT_EQ(e.key_path(), "filter.latency_window_ms");
+  EXPECT_NE(e.reason().find("expected a number"), std::string::npos);
+  e = expect_error(std::string(kMinimal) + "lcm: {url: [a, b]}\n");
+  EXPECT_EQ(e.key_path(), "lcm.url");
+  EXPECT_NE(e.reason().find("expected a string, got a sequence"), std::string::npos);
+  e = expect_error("sensors: {name: x}\n");
+  EXPECT_EQ(e.key_path(), "sensors");
+  EXPECT_NE(e.reason().find("expected a sequence"), std::string::npos);
+  e = expect_error(std::string(kMinimal) + "filter: {latency_window_ms: .nan}\n");
+  EXPECT_NE(e.reason().find("not finite"), std::string::npos) << e.what();
+}
+
+TEST(Config, OutOfRangeValues) {
+  ConfigError e = expect_error(std::string(kMinimal) + "filter: {latency_window_ms: -1}\n");
+  EXPECT_EQ(e.key_path(), "filter.latency_window_ms");
+  EXPECT_NE(e.reason().find("-1 is not in [0, 60000]"), std::string::npos) << e.what();
+  e = expect_error(std::string(kMinimal) + "checkpoint: {keep: 0}\n");
+  EXPECT_EQ(e.key_path(), "checkpoint.keep");
+  e = expect_error(R"(
+sensors:
+  - {name: d, type: dvl_pd0, transport: {type: sim}, mount: {lever_arm_m: [0, 0, 1000]}}
+)");
+  EXPECT_EQ(e.key_path(), "sensors[0].mount.lever_arm_m[2]");
+  e = expect_error(R"(
+sensors:
+  - {name: d, type: dvl_pd0, transport: {type: sim}, mount: {rotation_deg: [0, 0]}}
+)");
+  EXPECT_EQ(e.key_path(), "sensors[0].mount.rotation_deg");
+  EXPECT_NE(e.reason().find("expected 3 numbers, got 2"), std::string::npos);
+  e = expect_error(std::string(kMinimal) +
+                   "filter: {process_noise_psd: {accel_m2ps3: [1, -1, 1]}}\n");
+  EXPECT_EQ(e.key_path(), "filter.process_noise_psd.accel_m2ps3[1]");
+}
+
+TEST(Config, MissingRequiredKeys) {
+  EXPECT_EQ(expect_error("filter: {}\n").key_path(), "sensors");
+  EXPECT_EQ(expect_error("sensors:\n  - {type: altimeter, transport: {type: sim}}\n").key_path(),
+            "sensors[0].name");
+  EXPECT_EQ(expect_error("sensors:\n  - {name: a, transport: {type: sim}}\n").key_path(),
+            "sensors[0].type");
+  EXPECT_EQ(expect_error("sensors:\n  - {name: a, type: altimeter, transport: {type: serial}}\n")
+                .key_path(),
+            "sensors[0].transport.device");
+  const ConfigError e = expect_error(
+      "sensors:\n  - {name: c, type: camera_v4l2, transport: {type: v4l2, device: /dev/video0}}\n");
+  EXPECT_EQ(e.key_path(), "sensors[0].camera");
+  EXPECT_EQ(e.reason(), "missing required key");
+  EXPECT_EQ(
+      expect_error("sensors:\n  - name: c\n    type: camera_v4l2\n    transport: {type: sim}\n"
+                   "    camera: {fx: 1, fy: 1, cx: 1}\n")
+          .key_path(),
+      "sensors[0].camera.cy");
+}
+
+TEST(Config, SensorSemantics) {
+  ConfigError e = expect_error(
+      "sensors:\n  - {name: a, type: dvl_can, transport: {type: serial, device: /dev/x}}\n");
+  EXPECT_EQ(e.key_path(), "sensors[0].transport.type");
+  EXPECT_NE(e.reason().find("not valid for a dvl_can sensor"), std::string::npos) << e.what();
+  e = expect_error("sensors:\n  - {name: a, type: sonar, transport: {type: sim}}\n");
+  EXPECT_EQ(e.key_path(), "sensors[0].type");
+  EXPECT_NE(e.reason().find("'sonar' is not one of: dvl_pd0"), std::string::npos);
+  e = expect_error(
+      "sensors:\n  - {name: a, type: altimeter, transport: {type: sim}}\n"
+      "  - {name: a, type: altimeter, transport: {type: sim}}\n");
+  EXPECT_EQ(e.key_path(), "sensors[1].name");
+  EXPECT_NE(e.reason().find("duplicate"), std::string::npos);
+  e = expect_error(
+      "sensors:\n  - {name: a, type: altimeter, transport: {type: sim}, camera: {fx: 1}}\n");
+  EXPECT_EQ(e.key_path(), "sensors[0].camera");
+  e = expect_error(
+      "sensors:\n  - name: c\n    type: camera_gige\n    transport: {type: sim}\n"
+      "    camera: {fx: 1, fy: 1, cx: 1, cy: 1, distortion: [1, 2, 3]}\n");
+  EXPECT_EQ(e.key_path(), "sensors[0].camera.distortion");
+  e = expect_error("sensors: []\n");
+  EXPECT_EQ(e.key_path(), "sensors");
+  e = expect_error(std::string(kMinimal) + "lcm: {url: 'tcp://x'}\n");
+  EXPECT_EQ(e.key_path(), "lcm.url");
+}
+
+TEST(Config, NoiseInDegreesStoredInRadians) {
+  const NavdConfig c = parse_config(
+      "sensors:\n  - {name: h, type: heading_nmea, transport: {type: sim},"
+      " noise: {heading_deg: 0.5, roll_pitch_deg: 0.2}}\n");
+  EXPECT_NEAR(c.sensors[0].noise.heading_rad, 0.5 * kDeg, 1e-15);
+  EXPECT_NEAR(c.sensors[0].noise.roll_pitch_rad, 0.2 * kDeg, 1e-15);
+}
+
+TEST(Config, SyntaxAndFileErrors) {
+  ConfigError e = expect_error("sensors: [\n");
+  EXPECT_EQ(e.key_path(), "");
+  EXPECT_NE(e.reason().find("YAML syntax error at line"), std::string::npos) << e.what();
+  try {
+    load_config_file("/nonexistent/navd.yaml");
+    ADD_FAILURE() << "no error for a missing file";
+  } catch (const ConfigError& error) {
+    EXPECT_NE(std::string(error.what()).find("/nonexistent/navd.yaml"), std::string::npos);
+    EXPECT_EQ(error.reason(), "cannot open file");
+  }
+}
+
+}  // namespace
+}  // namespace nav::daemon
