@@ -176,6 +176,16 @@ TEST(CanConfig, MinimalConfigWithHexAndDefaults) {
   EXPECT_FALSE(c.messages[0].extended);
   EXPECT_EQ(c.messages[0].signals[0].scale, 1.0);
   EXPECT_FALSE(c.messages[0].signals[0].is_signed);
+  EXPECT_FALSE(c.messages[0].signals[0].min.has_value());
+  // DBC's [0|0] means "no range", not "only zero".
+  std::string dbc_style = kMinimal;
+  dbc_style.replace(dbc_style.find("intel}"), 6, "intel, min: 0, max: 0}");
+  const CanConfig d = parse_can_config(dbc_style);
+  EXPECT_FALSE(d.messages[0].signals[0].min.has_value());
+  EXPECT_FALSE(d.messages[0].signals[0].max.has_value());
+  std::string ranged = kMinimal;
+  ranged.replace(ranged.find("intel}"), 6, "intel, min: 0, max: 10}");
+  EXPECT_EQ(parse_can_config(ranged).messages[0].signals[0].max, 10.0);
 }
 
 TEST(CanConfig, ErrorsNameFileKeyPathAndReason) {

@@ -120,6 +120,11 @@ CanSignalSpec parse_signal(const YAML::Node& node, const std::string& path) {
   if (auto n = scalar_at(node, "unit", path, false)) s.unit = n.Scalar();
   if (auto n = scalar_at(node, "min", path, false)) s.min = parse_double(n, path + ".min");
   if (auto n = scalar_at(node, "max", path, false)) s.max = parse_double(n, path + ".max");
+  if (s.min == 0.0 && s.max == 0.0) {
+    // DBC writes [0|0] for "no range"; a table transcribed from a .dbc keeps that meaning.
+    s.min.reset();
+    s.max.reset();
+  }
   if (auto n = scalar_at(node, "invalid", path, false)) {
     const int64_t v = parse_int(n, path + ".invalid", std::numeric_limits<int64_t>::min(),
                                 std::numeric_limits<int64_t>::max());

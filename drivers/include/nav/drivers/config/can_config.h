@@ -19,7 +19,7 @@
 //           offset: 0             # optional, default 0
 //           unit: mm/s            # optional, default "" (dimensionless); converted to SI
 //           min: -5000            # optional physical range in `unit` (before SI conversion)
-//           max: 5000
+//           max: 5000             # min: 0 with max: 0 means no range (DBC's [0|0])
 //           invalid: 0x8000       # optional raw pattern meaning "no value" (negative ok if signed)
 //           multiplexer_value: 1  # optional, DBC m1: present only when the switch equals 1
 //           time_of_validity: true  # optional: sensor time counter of the message
