@@ -49,12 +49,15 @@ MeasurementQueue::Producer::~Producer() = default;
 
 bool MeasurementQueue::Producer::push(const Measurement& m) {
   Counters& counters = *counters_;
-  // Reserve a slot first so that the queue never holds more than `capacity` items.
-  if (impl_->count.fetch_add(1, std::memory_order_acq_rel) >= impl_->capacity) {
-    impl_->count.fetch_sub(1, std::memory_order_acq_rel);
-    counters.dropped.fetch_add(1, std::memory_order_relaxed);
-    return false;
-  }
+  // Reserve a slot first (compare-exchange, so the count itself never exceeds capacity).
+  std::size_t reserved = impl_->count.load(std::memory_order_acquire);
+  do {
+    if (reserved >= impl_->capacity) {
+      counters.dropped.fetch_add(1, std::memory_order_relaxed);
+      return false;
+    }
+  } while (!impl_->count.compare_exchange_weak(reserved, reserved + 1, std::memory_order_acq_rel,
+                                               std::memory_order_acquire));
   if (!impl_->queue.enqueue(token_->token, m)) {  // only on allocation failure
     impl_->count.fetch_sub(1, std::memory_order_acq_rel);
     counters.dropped.fetch_add(1, std::memory_order_relaxed);
