@@ -70,6 +70,7 @@ Status PoseGraphReplay::start() {
         Link{&e, Mat6(llt.solve(Mat6::Identity()))});
   }
   broken_chain_ = 0;
+  skipped_bound_updates_ = 0;
   for (int k = 1; k < n; ++k) {
     VertexPlan& p = plan_[static_cast<size_t>(k)];
     auto joins = [&](const Link& l, int a, int b) {
@@ -209,7 +210,10 @@ Status PoseGraphReplay::update_bounds() {
     }
     const Eigen::MatrixXd H_r = robot_is_from ? H_a : H_b;
     const Eigen::MatrixXd H_i = robot_is_from ? H_b : H_a;
-    if (Status s = bounds_.update(proposal, H_r, H_i, link.covariance); !s.ok()) {
+    const Status s = bounds_.update(proposal, H_r, H_i, link.covariance);
+    if (s.code() == StatusCode::kNotPositiveDefinite) {
+      ++skipped_bound_updates_;
+    } else if (!s.ok()) {
       return Status::Error(s.code(), edge_name(*link.edge) + ": " + s.message());
     }
   }
@@ -262,7 +266,11 @@ BoundsCheck check_bounds(const PoseGraphReplay& replay, const ExactMarginals& ex
     if (!bounds.contains(i)) continue;
     const Eigen::MatrixXd sigma = exact.marginal(i);
     check_one(bounds.bound(i), sigma);
-    check.logdet_ratio_ours.push_back(logdet_ratio(bounds.bound(i), sigma));
+    try {
+      check.logdet_ratio_ours.push_back(logdet_ratio(bounds.bound(i), sigma));
+    } catch (const std::invalid_argument&) {
+      ++check.not_positive_definite_bounds;  // only an uncertified, stale bound can be
+    }
     if (with_markov_blanket) {
       const MarkovBlanketResult mb =
           markov_blanket_joint(replay.filter().information(), Esdf::kRobotBlock, i);

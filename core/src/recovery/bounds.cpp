@@ -189,6 +189,19 @@ Status CovarianceBounds::propose(int state, const Eigen::MatrixXd& sigma_ir,
   return Status::Ok();
 }
 
+bool CovarianceBounds::joseph(const Eigen::MatrixXd& joint, const Eigen::MatrixXd& H,
+                              const Eigen::MatrixXd& R, Eigen::MatrixXd* posterior) {
+  if (!finite(joint)) return false;
+  const Eigen::MatrixXd PHt = joint * H.transpose();
+  const Eigen::MatrixXd S = symmetric(H * PHt + R);
+  Eigen::LLT<Eigen::MatrixXd> llt(S);
+  if (llt.info() != Eigen::Success) return false;
+  const Eigen::MatrixXd K = llt.solve(PHt.transpose()).transpose();  // P Hᵀ S⁻¹
+  const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(joint.rows(), joint.cols()) - K * H;
+  *posterior = IKH * joint * IKH.transpose() + K * R * K.transpose();
+  return finite(*posterior);
+}
+
 Status CovarianceBounds::update(const LinkProposal& proposal, const Eigen::MatrixXd& H_r,
                                 const Eigen::MatrixXd& H_i, const Eigen::MatrixXd& R) {
   const int d = block_dim_;
@@ -208,24 +221,36 @@ Status CovarianceBounds::update(const LinkProposal& proposal, const Eigen::Matri
   }
   Eigen::MatrixXd H(m, 2 * d);
   H << H_r, H_i;
-  const Eigen::MatrixXd& P = proposal.joint;
-  const Eigen::MatrixXd PHt = P * H.transpose();
-  const Eigen::MatrixXd S = symmetric(H * PHt + R);
-  Eigen::LLT<Eigen::MatrixXd> llt(S);
-  if (llt.info() != Eigen::Success) {
+  Eigen::MatrixXd best_ii, best_rr, posterior;
+  auto consider = [&](const Eigen::MatrixXd& joint) {
+    if (!joseph(joint, H, R, &posterior)) return;
+    const Eigen::MatrixXd ii = symmetric(posterior.bottomRightCorner(d, d));
+    const Eigen::MatrixXd rr = symmetric(posterior.topLeftCorner(d, d));
+    if (best_ii.size() == 0 || ii.trace() < best_ii.trace()) best_ii = ii;
+    if (best_rr.size() == 0 || rr.trace() < best_rr.trace()) best_rr = rr;
+  };
+  consider(proposal.joint);
+  if (options_.certify_truncation) {
+    // Correlation-free candidates (covariance intersection, see the file comment).
+    const Eigen::MatrixXd& b_ii = entries_[static_cast<size_t>(proposal.state)].bound;
+    Eigen::MatrixXd joint = Eigen::MatrixXd::Zero(2 * d, 2 * d);
+    for (double omega : {0.2, 0.35, 0.5, 0.65, 0.8}) {
+      joint.topLeftCorner(d, d) = robot_bound_ / omega;
+      joint.bottomRightCorner(d, d) = b_ii / (1.0 - omega);
+      consider(joint);
+    }
+  }
+  if (best_ii.size() == 0) {
     return Status::Error(StatusCode::kNotPositiveDefinite,
                          "CovarianceBounds::update: innovation covariance of the link to state " +
-                             std::to_string(proposal.state) + " is not positive definite");
+                             std::to_string(proposal.state) +
+                             " is not positive definite (proposal joint not PSD: stale recovery?)"
+                             "; bound left unchanged");
   }
-  const Eigen::MatrixXd K = llt.solve(PHt.transpose()).transpose();  // P Hᵀ S⁻¹
-  const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(2 * d, 2 * d) - K * H;
-  const Eigen::MatrixXd posterior = IKH * P * IKH.transpose() + K * R * K.transpose();
-  if (!finite(posterior)) {
-    return Status::Error(StatusCode::kNumericalFailure,
-                         "CovarianceBounds::update: non-finite posterior for state " +
-                             std::to_string(proposal.state));
+  store(proposal.state, best_ii);
+  if (options_.certify_truncation && best_rr.trace() < robot_bound_.trace()) {
+    set_robot_bound(best_rr);
   }
-  store(proposal.state, posterior.bottomRightCorner(d, d));
   return Status::Ok();
 }
 

@@ -143,10 +143,19 @@ PcgSummary solve_pcg(const SpdOperator& A, const BlockJacobiPreconditioner& M,
   // R = B - A X (warm start), Z = M^-1 R, P = Z.
   A.multiply(X, Q);
   R = B - Q;
+  const Eigen::VectorXd rhs_norm = B.colwise().norm().transpose();
+  if (options.restart_worse_than_zero) {
+    for (Eigen::Index c = 0; c < m; ++c) {
+      if (R.col(c).norm() > rhs_norm[c]) {
+        X.col(c).setZero();
+        R.col(c) = B.col(c);
+        ++summary.restarted_columns;
+      }
+    }
+  }
   M.apply(R, Z);
   P = Z;
 
-  const Eigen::VectorXd rhs_norm = B.colwise().norm().transpose();
   Eigen::VectorXd rz = (R.cwiseProduct(Z)).colwise().sum().transpose();
   std::vector<bool> active(static_cast<size_t>(m), true);
   auto column_done = [&](Eigen::Index c) {

@@ -76,7 +76,8 @@ class PoseGraphReplay {
   Status predict();
   /// Phase 2: state recovery on the current Λ (mode from options) and the bounds certificate.
   RecoveryResult recover();
-  /// Phase 3: propose + Kalman update of the bound of every link of the current vertex.
+  /// Phase 3: propose + Kalman update of the bound of every link of the current vertex. A
+  /// refused update (joint not PSD) is counted (skipped_bound_updates) and not an error.
   Status update_bounds();
   /// Phase 4: the filter's link updates; advances to the next vertex.
   Status apply_links();
@@ -87,6 +88,9 @@ class PoseGraphReplay {
   int current_links() const;
   /// Vertices whose odometry chain was broken (process from another edge).
   int broken_chain_vertices() const { return broken_chain_; }
+  /// Link bound updates refused because the proposal joint was not PSD (only possible
+  /// without certification, from a stale truncated recovery); that bound stays as it was.
+  int skipped_bound_updates() const { return skipped_bound_updates_; }
 
   const Esdf& filter() const { return filter_; }
   const StateRecovery& recovery() const { return recovery_; }
@@ -119,6 +123,7 @@ class PoseGraphReplay {
   int next_ = 0;
   int current_ = -1;  // vertex being processed (between predict and apply_links)
   int broken_chain_ = 0;
+  int skipped_bound_updates_ = 0;
   bool started_ = false;
 };
 
@@ -129,7 +134,8 @@ struct BoundsCheck {
   double worst_min_eigenvalue = 0; ///< smallest eigenvalue of bound - exact over all states
   std::vector<double> logdet_ratio_ours;           ///< per delayed state
   std::vector<double> logdet_ratio_markov_blanket; ///< per delayed state
-  int markov_blanket_overconfident = 0;            ///< exact - MB not... (MB - exact not PSD)
+  int markov_blanket_overconfident = 0;            ///< MB - exact not PSD
+  int not_positive_definite_bounds = 0;  ///< bounds that are not SPD (no log det; uncertified)
 };
 
 /// Compares every stored bound (and the robot's) with the exact marginal from `exact`

@@ -34,6 +34,15 @@
 //   again and keeps the smaller-trace of the two (both are valid after both links).
 //   The robot bound B_rr is propagated through predictions (F B Fᵀ + Q, valid because
 //   Σ_rr' = F Σ_rr Fᵀ + Q) and replaced by sym(X_rr) + ε_r I whenever that has smaller trace.
+// Correlation-free fallback (certify_truncation only): (C1) is a worst-case bound that grows
+//   with the map (L sums over all states), so after a short CG budget the inflated joint can be
+//   far looser than needed. For any ω in (0, 1) and PSD [A B; Bᵀ C],
+//     [A B; Bᵀ C] <= blkdiag(A/ω, C/(1-ω))                 (covariance intersection)
+//   so blkdiag(B_rr/ω, Σ~_ii/(1-ω)) also bounds the true joint using only stored bounds. update()
+//   runs the Kalman update on the certified CG joint and on this joint for a few ω, and keeps
+//   the posterior block of smallest trace for Σ~_ii and for the robot bound B_rr (every
+//   candidate is >= the true posterior, so any choice is certified). Sequential links within a
+//   snapshot are fine: the fallback uses the current bounds, which hold after earlier links.
 // GUARANTEE (certify_truncation = true): if every state of the filter has a bound (insert() on
 // every augmentation), the prior bound of the robot is >= its covariance, and the residual norm
 // passed to set_recovery() is the true ‖E_r - Λ X‖_F of the column handed to propose(), then
@@ -102,7 +111,11 @@ class CovarianceBounds {
   /// A successful registration z = h(x_r, x_i) + v, v ~ N(0, R), linearised with
   /// H = [H_r | H_i] (m x d each): Joseph-form Kalman update of the proposal's joint,
   ///   K = P Hᵀ (H P Hᵀ + R)⁻¹,  P+ = (I - K H) P (I - K H)ᵀ + K R Kᵀ,
-  /// and Σ~_ii <- sym(P+_ii). Use the same H and R as the filter update.
+  /// and Σ~_ii <- sym(P+_ii). Use the same H and R as the filter update. When certifying, the
+  /// correlation-free candidates (file comment) are updated too and the smallest-trace
+  /// posterior kept, for Σ~_ii and for the robot bound. kNotPositiveDefinite if no candidate's
+  /// innovation covariance is SPD (possible only without certification, from a stale
+  /// recovery): the bound is then left unchanged.
   Status update(const LinkProposal& proposal, const Eigen::MatrixXd& H_r,
                 const Eigen::MatrixXd& H_i, const Eigen::MatrixXd& R);
 
@@ -128,6 +141,9 @@ class CovarianceBounds {
     long snapshot_epoch = -1;
   };
   void store(int state, const Eigen::MatrixXd& bound);
+  /// Joseph-form posterior of `joint` (2d x 2d); false if S is not SPD or the result not finite.
+  static bool joseph(const Eigen::MatrixXd& joint, const Eigen::MatrixXd& H,
+                     const Eigen::MatrixXd& R, Eigen::MatrixXd* posterior);
   void set_robot_bound(const Eigen::MatrixXd& bound);
 
   int block_dim_;

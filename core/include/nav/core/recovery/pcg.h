@@ -105,6 +105,11 @@ struct PcgOptions {
   /// Recompute R = B - A X with one extra product at the end (recommended; the bounds rely on
   /// it). When false the recurrence residual is reported.
   bool recompute_true_residual = true;
+  /// A column whose warm start has a larger residual than x = 0 (‖b - A x0‖ > ‖b‖) restarts
+  /// from zero. A stale warm start propagated through many predictions can be arbitrarily bad
+  /// (errors are multiplied by F every step); this keeps every column's residual from growing
+  /// without bound under a fixed budget.
+  bool restart_worse_than_zero = true;
 
   Status validate() const;
 };
@@ -116,6 +121,7 @@ struct PcgSummary {
   Eigen::VectorXd relative_residual;   ///< residual_norm / ‖b_c‖ (‖r‖ when b_c = 0)
   double max_relative_residual = 0.0;  ///< max over columns
   bool converged = false;              ///< every column met relative_tolerance
+  int restarted_columns = 0;           ///< columns restarted from zero (see PcgOptions)
 };
 
 /// Scratch matrices of a solve (reused between solves; grows, never shrinks).

@@ -1,0 +1,195 @@
+// Cost of one state-recovery step (recovery/state_recovery.h) at full map size, to check that
+// it grows at most linearly with the map: BM_RecoveryStep/<graph> runs the real-time mode
+// (warm-started block-Jacobi PCG, fixed iterations, true residual, preconditioner refactored)
+// on the final information matrix of sphere2500, parking-garage and a synthetic lawnmower pose
+// graph ten times the size of parking-garage. Counters: state dimension, ns per dimension.
+// Also: the operator choice (InformationMatrix::multiply vs a CSR snapshot, and the snapshot
+// cost) and one bounds update (propose + Joseph + fallback candidates).
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "nav/core/geometry/pose.h"
+#include "nav/core/posegraph/g2o.h"
+#include "nav/core/recovery/bounds.h"
+#include "nav/core/recovery/pcg.h"
+#include "nav/core/recovery/state_recovery.h"
+
+namespace nav::core {
+namespace {
+
+/// Lawnmower survey: `rows` tracklines of `cols` poses, 2 m apart along track and 4 m across;
+/// odometry along the path and a cross-track link to the pose beside it on the previous line
+/// at every second pose (camera overlap). Estimates and measurements are exact.
+PoseGraph lawnmower_graph(int rows, int cols) {
+  PoseGraph g;
+  auto pose_at = [&](int r, int c) {
+    const bool forward = r % 2 == 0;
+    Vec6 x = Vec6::Zero();
+    x[0] = 2.0 * (forward ? c : cols - 1 - c);
+    x[1] = 4.0 * r;
+    x[5] = forward ? 0.0 : M_PI;
+    return x;
+  };
+  Mat6 information = Mat6::Identity();
+  information.topLeftCorner<3, 3>() *= 100.0;        // 10 cm
+  information.bottomRightCorner<3, 3>() *= 3.0e3;    // ~1 deg
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const int id = r * cols + c;
+      g.vertices.push_back(G2oVertex{id, pose_at(r, c)});
+    }
+  }
+  auto add_edge = [&](int a, int b) {
+    G2oEdge e;
+    e.from = e.from_index = a;
+    e.to = e.to_index = b;
+    e.measurement = tail_to_tail(g.vertices[static_cast<size_t>(a)].pose,
+                                 g.vertices[static_cast<size_t>(b)].pose);
+    e.information = information;
+    e.information_g2o = information;
+    e.line = 0;
+    g.edges.push_back(e);
+  };
+  const int n = rows * cols;
+  for (int k = 1; k < n; ++k) add_edge(k - 1, k);
+  for (int r = 1; r < rows; ++r) {
+    for (int c = 0; c < cols; c += 2) {
+      // Same along-track position on the previous line (reversed direction).
+      add_edge((r - 1) * cols + (cols - 1 - c), r * cols + c);
+    }
+  }
+  return g;
+}
+
+struct Problem {
+  InformationMatrix lambda{6};
+  CsrMatrix csr;
+  Eigen::VectorXd eta;
+};
+
+/// Loads (once) the named graph's information matrix; nullptr if its data file is absent.
+const Problem* problem(const std::string& name) {
+  static std::map<std::string, std::unique_ptr<Problem>> cache;
+  if (auto it = cache.find(name); it != cache.end()) return it->second.get();
+  PoseGraph graph;
+  if (name == "lawnmower-20k") {
+    graph = lawnmower_graph(100, 200);
+  } else {
+    const auto path = std::filesystem::path(NAV_DATA_DIR) / "posegraphs" / (name + ".g2o");
+    if (!std::filesystem::exists(path)) return nullptr;
+    graph = read_g2o(path.string());
+  }
+  auto p = std::make_unique<Problem>();
+  p->lambda = assemble_information(graph);
+  p->csr = p->lambda.to_sparse();
+  Eigen::VectorXd mean(p->lambda.dim());
+  for (size_t v = 0; v < graph.vertices.size(); ++v) {
+    mean.segment(6 * static_cast<Eigen::Index>(v), 6) = graph.vertices[v].pose;
+  }
+  p->eta = p->csr * mean;
+  return (cache[name] = std::move(p)).get();
+}
+
+void set_counters(benchmark::State& state, Eigen::Index dim) {
+  state.counters["dim"] = static_cast<double>(dim);
+  state.counters["ns_per_dim"] = benchmark::Counter(
+      1e-9 * static_cast<double>(dim),
+      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+/// One real-time recovery step: K PCG iterations from the previous step's solution.
+void BM_RecoveryStep(benchmark::State& state, const std::string& name, bool use_csr) {
+  const Problem* p = problem(name);
+  if (p == nullptr) {
+    state.SkipWithError("pose graph data file absent");
+    return;
+  }
+  StateRecoveryOptions options;
+  options.iterations_per_step = static_cast<int>(state.range(0));
+  StateRecovery recovery(6, options);
+  (void)recovery.set_solution(Eigen::MatrixXd::Zero(p->lambda.dim(), 7));
+  for (auto _ : state) {
+    const RecoveryResult r =
+        use_csr ? recovery.solve(p->csr, p->eta) : recovery.solve(p->lambda, p->eta);
+    benchmark::DoNotOptimize(r.max_relative_residual);
+  }
+  set_counters(state, p->lambda.dim());
+}
+
+void BM_Multiply(benchmark::State& state, const std::string& name, bool use_csr) {
+  const Problem* p = problem(name);
+  if (p == nullptr) {
+    state.SkipWithError("pose graph data file absent");
+    return;
+  }
+  const Eigen::MatrixXd X = Eigen::MatrixXd::Random(p->lambda.dim(), 7);
+  Eigen::MatrixXd Y(p->lambda.dim(), 7);
+  for (auto _ : state) {
+    if (use_csr) {
+      CsrOperator(p->csr).multiply(X, Y);
+    } else {
+      p->lambda.multiply(X, Y);
+    }
+    benchmark::DoNotOptimize(Y.data());
+  }
+  set_counters(state, p->lambda.dim());
+}
+
+void BM_CsrSnapshot(benchmark::State& state, const std::string& name) {
+  const Problem* p = problem(name);
+  if (p == nullptr) {
+    state.SkipWithError("pose graph data file absent");
+    return;
+  }
+  for (auto _ : state) {
+    const CsrMatrix snapshot = p->lambda.to_sparse();
+    benchmark::DoNotOptimize(snapshot.nonZeros());
+  }
+  set_counters(state, p->lambda.dim());
+}
+
+void BM_BoundsUpdate(benchmark::State& state) {
+  CovarianceBounds bounds(6);
+  (void)bounds.initialize_robot(Mat6::Identity());
+  (void)bounds.insert(1);
+  (void)bounds.set_recovery(Mat6::Identity() * 0.5, 1e-3, 2);
+  const Mat6 sigma_ir = Mat6::Identity() * 0.1;
+  const Eigen::MatrixXd H_r = -Mat6::Identity(), H_i = Mat6::Identity();
+  const Eigen::MatrixXd R = Mat6::Identity() * 0.01;
+  for (auto _ : state) {
+    LinkProposal proposal;
+    (void)bounds.propose(1, sigma_ir, &proposal);
+    const Status s = bounds.update(proposal, H_r, H_i, R);
+    benchmark::DoNotOptimize(s.ok());
+  }
+}
+
+const int kRegistered = [] {
+  for (const std::string name : {"sphere2500", "parking-garage", "lawnmower-20k"}) {
+    benchmark::RegisterBenchmark(("BM_RecoveryStep/" + name).c_str(), BM_RecoveryStep, name,
+                                 false)
+        ->Arg(5)
+        ->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark(("BM_RecoveryStepCsr/" + name).c_str(), BM_RecoveryStep, name,
+                                 true)
+        ->Arg(5)
+        ->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark(("BM_MultiplyBlocks/" + name).c_str(), BM_Multiply, name, false)
+        ->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark(("BM_MultiplyCsr/" + name).c_str(), BM_Multiply, name, true)
+        ->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark(("BM_CsrSnapshot/" + name).c_str(), BM_CsrSnapshot, name)
+        ->Unit(benchmark::kMicrosecond);
+  }
+  benchmark::RegisterBenchmark("BM_BoundsUpdate", BM_BoundsUpdate)
+      ->Unit(benchmark::kMicrosecond);
+  return 0;
+}();
+
+}  // namespace
+}  // namespace nav::core
