@@ -37,28 +37,28 @@ CanSignalSpec sig(const char* name, uint32_t start, uint32_t length, CanByteOrde
 std::vector<CanMessageSpec> table() {
   constexpr auto kI = CanByteOrder::kIntel;
   constexpr auto kM = CanByteOrder::kMotorola;
-  CanMessageSpec dvl{"dvl", 0x200, false, 8, "", {}};
+  CanMessageSpec dvl{"dvl", 0x200, false, 8, "", {}, "", ""};
   dvl.signals = {sig("vx", 0, 16, kI, true, 0.1, "mm/s"), sig("vy", 16, 16, kI, true, 0.1, "mm/s"),
                  sig("t", 32, 32, kI, false, 1.0, "ms")};
   dvl.signals[0].invalid_raw = 0x8000;
   dvl.signals[0].min = -5000;
   dvl.signals[0].max = 5000;
   dvl.signals[2].time_of_validity = true;
-  CanMessageSpec fog{"fog", 0x18FF1002, true, 8, "", {}};
+  CanMessageSpec fog{"fog", 0x18FF1002, true, 8, "", {}, "", ""};
   fog.signals = {sig("rx", 7, 20, kM, true, 1e-4, "deg/s"),
                  sig("ry", 19, 20, kM, true, 1e-4, "deg/s"),
                  sig("rz", 47, 20, kM, true, 1e-4, "deg/s"), sig("st", 59, 4, kM, false, 1, "")};
-  CanMessageSpec moto{"moto", 496, false, 8, "", {}};
+  CanMessageSpec moto{"moto", 496, false, 8, "", {}, "", ""};
   moto.signals = {sig("temp", 0, 12, kM, true, 0.01, "K"), sig("r", 6, 6, kM, false, 0.1, "m"),
                   sig("en", 7, 1, kM, false, 1, "")};
   moto.signals[0].offset = 250;
-  CanMessageSpec mux{"mux", 0x202, false, 4, "sel", {}};
+  CanMessageSpec mux{"mux", 0x202, false, 4, "sel", {}, "", ""};
   mux.signals = {sig("sel", 0, 2, kI, false, 1, ""), sig("a", 2, 29, kI, false, 1, "mm"),
                  sig("b", 2, 13, kI, true, 0.5, "cm"), sig("c", 31, 1, kI, false, 1, "")};
   mux.signals[1].multiplexer_value = 0;
   mux.signals[2].multiplexer_value = 1;
   mux.signals[2].invalid_raw = 0x1000;
-  CanMessageSpec us{"us", 0x18FF1003, true, 4, "", {sig("t", 7, 16, kM, false, 1.0, "us")}};
+  CanMessageSpec us{"us", 0x18FF1003, true, 4, "", {sig("t", 7, 16, kM, false, 1.0, "us")}, "", ""};
   us.signals[0].time_of_validity = true;
   return {dvl, fog, moto, mux, us};
 }

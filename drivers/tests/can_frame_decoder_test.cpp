@@ -48,6 +48,7 @@ TEST(CanFrameDecoder, HostTimeFromTheKernelStamp) {
 TEST(CanFrameDecoder, FogTimeCounterMapsOntoTheMonotonicClock) {
   CanFrameDecoder decoder(load_can_config_file(kExample).messages);
   const CanMessageSpec& fog_time = *decoder.signals().find("fog_time");
+  const CanMessageSpec& attitude = *decoder.signals().find("fog_attitude");
   // 32-bit µs counter starting 2 s before its wrap, 80 ppm slow, 100 Hz; the frame reaches
   // the kernel 0.2 ms + Exp(1 ms) after its time of validity.
   std::mt19937_64 rng(31);
@@ -65,10 +66,15 @@ TEST(CanFrameDecoder, FogTimeCounterMapsOntoTheMonotonicClock) {
     f.kernel_realtime_us = 1'700'000'000'000'000 + kernel_mono;
     ASSERT_TRUE(decoder.decode(f, out));
     EXPECT_EQ(out.time.host.monotonic_us, kernel_mono);
+    const std::optional<int64_t> time_of_validity = decoder.time_of_validity_us();
+    // The attitude message with the same seq follows and is dated by that fog_time.
+    CanFrame a = frame_of(attitude, {{"heading_rad", 1.0}, {"seq", double(k % 256)}});
+    a.received = f.received;
+    ASSERT_TRUE(decoder.decode(a, out));
+    EXPECT_EQ(decoder.time_of_validity_us(), time_of_validity);
     if (k < 500) continue;  // first 5 s: the window fills
-    ASSERT_TRUE(decoder.time_of_validity_us().has_value());
-    max_error_us = std::max(max_error_us,
-                            std::abs(static_cast<double>(*decoder.time_of_validity_us() - t_us)));
+    ASSERT_TRUE(time_of_validity.has_value());
+    max_error_us = std::max(max_error_us, std::abs(static_cast<double>(*time_of_validity - t_us)));
   }
   std::printf("FOG 32-bit us counter, 0.2 ms + Exp(1 ms) latency: max |error| %.0f us\n",
               max_error_us);

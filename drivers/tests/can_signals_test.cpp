@@ -86,7 +86,7 @@ TEST(CanSignals, HandCheckedIntelLayouts) {
   EXPECT_EQ(can_extract_raw(sig("c", 63, 1, kIntel), data), 1u);
   EXPECT_EQ(can_extract_raw(sig("d", 4, 8, kIntel), data), 0x23u);  // crosses bytes 0..1
   // The same 12 bits signed: 0xABF - 0x1000 = -1345.
-  CanMessageSpec m{"m", 0x10, false, 8, "", {sig("b", 20, 12, kIntel, true)}};
+  CanMessageSpec m{"m", 0x10, false, 8, "", {sig("b", 20, 12, kIntel, true)}, "", ""};
   CanSignalDecoder decoder({m});
   EXPECT_EQ(*decoder.decode(0x10, false, data, {})->value("b"), -1345.0);
 }
@@ -130,7 +130,7 @@ TEST(CanSignals, AgreesWithWordReferenceForEveryLayout) {
     for (uint32_t start = 0; start < 64; ++start) {
       for (uint32_t length = 1; length <= 64; ++length) {
         CanSignalSpec s = sig("s", start, length, order);
-        CanMessageSpec m{"m", 1, false, 8, "", {s}};
+        CanMessageSpec m{"m", 1, false, 8, "", {s}, "", ""};
         if (!validate_can_messages({m}).empty()) continue;  // runs past the frame
         ++layouts;
         for (int trial = 0; trial < 3; ++trial) {
@@ -153,7 +153,7 @@ TEST(CanSignals, AgreesWithWordReferenceForEveryLayout) {
 }
 
 TEST(CanSignals, RoundTripsSignedOddLengthsAndScales) {
-  CanMessageSpec m{"m", 0x321, false, 8, "", {}};
+  CanMessageSpec m{"m", 0x321, false, 8, "", {}, "", ""};
   m.signals = {sig("a_mps", 3, 13, kIntel, true, 0.5, 0.0, "mm/s"),
                sig("b_rad", 29, 20, kMotorola, true, 0.001, 0.0, "deg"),
                sig("c_m", 59, 3, kMotorola, false, 1.0, -2.0, "m"),
@@ -182,7 +182,8 @@ TEST(CanSignals, RoundTripsSignedOddLengthsAndScales) {
 }
 
 TEST(CanSignals, EncoderSaturatesAndRejectsUnknownNames) {
-  CanMessageSpec m{"m", 0x1, false, 2, "", {sig("s", 0, 8, kIntel, true), sig("u", 8, 4, kIntel)}};
+  CanMessageSpec m{"m", 0x1, false, 2, "", {sig("s", 0, 8, kIntel, true), sig("u", 8, 4, kIntel)},
+                   "",  ""};
   const std::vector<CanSignalInput> big = {{"s", 1000.0}, {"u", -3.0}};
   EXPECT_EQ(*encode_can_message(m, big), (std::vector<uint8_t>{0x7F, 0x00}));
   const std::vector<CanSignalInput> small = {{"s", -1000.0}, {"u", 99.0}};
@@ -192,7 +193,7 @@ TEST(CanSignals, EncoderSaturatesAndRejectsUnknownNames) {
 }
 
 CanMessageSpec dvl_like() {
-  CanMessageSpec m{"dvl", 0x200, false, 8, "", {}};
+  CanMessageSpec m{"dvl", 0x200, false, 8, "", {}, "", ""};
   CanSignalSpec vx = sig("v_x_mps", 0, 16, kIntel, true, 1.0, 0.0, "mm/s");
   vx.invalid_raw = 0x8000;
   vx.min = -5000.0;
@@ -247,7 +248,7 @@ TEST(CanSignals, UnknownIdsAndWrongLengthsAreCountedNotDecoded) {
 }
 
 TEST(CanSignals, MultiplexedSignalsFollowTheSwitch) {
-  CanMessageSpec m{"range", 0x202, false, 4, "beam", {}};
+  CanMessageSpec m{"range", 0x202, false, 4, "beam", {}, "", ""};
   CanSignalSpec r1 = sig("r1_m", 8, 16, kIntel, false, 1.0, 0.0, "mm");
   r1.multiplexer_value = 0;
   CanSignalSpec r2 = sig("r2_m", 8, 16, kIntel, false, 1.0, 0.0, "mm");
@@ -265,6 +266,59 @@ TEST(CanSignals, MultiplexedSignalsFollowTheSwitch) {
   EXPECT_FALSE(out->value("r1_m").has_value());
   EXPECT_DOUBLE_EQ(*out->value("r2_m"), 12.345);
   EXPECT_EQ(*out->value("q"), 7.0);
+}
+
+std::vector<CanMessageSpec> linked_pair() {
+  CanMessageSpec time{"time", 0x201, false, 5, "", {}, "", ""};
+  CanSignalSpec t = sig("time_s", 0, 32, kIntel, false, 1.0, 0.0, "ms");
+  t.time_of_validity = true;
+  time.signals = {t, sig("seq", 32, 8, kIntel)};
+  CanMessageSpec vel{"vel", 0x200, false, 3, "", {}, "time", "seq"};
+  vel.signals = {sig("v_mps", 0, 16, kIntel, true, 1.0, 0.0, "mm/s"), sig("seq", 16, 8, kIntel)};
+  return {time, vel};
+}
+
+TEST(CanSignals, TimeLinkDatesMessagesWithoutTheirOwnCounter) {
+  CanSignalDecoder decoder(linked_pair());
+  const CanMessageSpec& time = *decoder.find("time");
+  const CanMessageSpec& vel = *decoder.find("vel");
+  auto time_frame = [&](double t_s, int seq) {
+    const std::vector<CanSignalInput> in = {{"time_s", t_s}, {"seq", double(seq)}};
+    return *encode_can_message(time, in);
+  };
+  auto vel_sensor_time = [&](int seq) {
+    const std::vector<CanSignalInput> in = {{"v_mps", 0.5}, {"seq", double(seq)}};
+    return decoder.decode(0x200, false, *encode_can_message(vel, in), {})->time.sensor_time_us;
+  };
+  EXPECT_FALSE(vel_sensor_time(5).has_value());  // no time message yet
+  ASSERT_TRUE(decoder.decode(0x201, false, time_frame(1.0, 5), {}));
+  EXPECT_EQ(vel_sensor_time(5), 1'000'000);
+  EXPECT_FALSE(vel_sensor_time(6).has_value());
+  for (int seq = 6; seq <= 10; ++seq) decoder.decode(0x201, false, time_frame(seq, seq), {});
+  EXPECT_EQ(vel_sensor_time(10), 10'000'000);
+  EXPECT_EQ(vel_sensor_time(7), 7'000'000);      // the last four are remembered
+  EXPECT_FALSE(vel_sensor_time(5).has_value());  // pushed out
+  ASSERT_TRUE(decoder.decode(0x201, false, time_frame(11.0, 7), {}));  // seq wrapped around
+  EXPECT_EQ(vel_sensor_time(7), 11'000'000);                           // the newest wins
+}
+
+TEST(CanSignals, TimeLinkValidation) {
+  auto error_of = [](void (*edit)(std::vector<CanMessageSpec>&)) {
+    std::vector<CanMessageSpec> ms = linked_pair();
+    edit(ms);
+    return validate_can_messages(ms);
+  };
+  EXPECT_EQ(error_of([](auto&) {}), "");
+  EXPECT_EQ(error_of([](auto& ms) { ms[1].time_from = "nope"; }),
+            "messages[1].time_from: \"nope\" is not another message of the table");
+  EXPECT_EQ(error_of([](auto& ms) { ms[1].time_match = ""; }),
+            "messages[1].time_match: time_from and time_match go together");
+  EXPECT_EQ(error_of([](auto& ms) { ms[0].signals[1].name = "sequence"; }),
+            "messages[1].time_match: \"seq\" is not an unmultiplexed signal of message \"time\"");
+  EXPECT_EQ(error_of([](auto& ms) { ms[0].signals[0].time_of_validity = false; }),
+            "messages[1].time_from: message \"time\" has no time_of_validity signal");
+  EXPECT_EQ(error_of([](auto& ms) { ms[1].time_from = "vel"; }),
+            "messages[1].time_from: \"vel\" is not another message of the table");
 }
 
 TEST(CanSignals, UnitsConvertToSi) {

@@ -1,6 +1,7 @@
 // CAN signal codec (DBC model); bit numbering and conventions in can_signals.h.
 #include "nav/drivers/codecs/can_signals.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -182,6 +183,45 @@ const CanSignalSpec* find_signal(const CanMessageSpec& msg, std::string_view nam
   return nullptr;
 }
 
+bool has_time_signal(const CanMessageSpec& msg) {
+  for (const CanSignalSpec& s : msg.signals) {
+    if (s.time_of_validity) return true;
+  }
+  return false;
+}
+
+/// The time_from / time_match pair of message `m`, or empty.
+std::string validate_time_link(const std::vector<CanMessageSpec>& messages, size_t m) {
+  const CanMessageSpec& msg = messages[m];
+  const std::string path = "messages[" + std::to_string(m) + "]";
+  if (msg.time_from.empty() && msg.time_match.empty()) return {};
+  if (msg.time_from.empty() || msg.time_match.empty()) {
+    return path + (msg.time_from.empty() ? ".time_from" : ".time_match") +
+           ": time_from and time_match go together";
+  }
+  if (has_time_signal(msg)) {
+    return path + ".time_from: the message has its own time_of_validity signal";
+  }
+  const CanMessageSpec* source = nullptr;
+  for (const CanMessageSpec& other : messages) {
+    if (other.name == msg.time_from) source = &other;
+  }
+  if (source == nullptr || source == &msg) {
+    return path + ".time_from: \"" + msg.time_from + "\" is not another message of the table";
+  }
+  if (!has_time_signal(*source)) {
+    return path + ".time_from: message \"" + msg.time_from + "\" has no time_of_validity signal";
+  }
+  for (const CanMessageSpec* side : {&msg, source}) {
+    const CanSignalSpec* match = find_signal(*side, msg.time_match);
+    if (match == nullptr || match->multiplexer_value) {
+      return path + ".time_match: \"" + msg.time_match +
+             "\" is not an unmultiplexed signal of message \"" + side->name + "\"";
+    }
+  }
+  return {};
+}
+
 }  // namespace
 
 std::optional<CanUnitConversion> can_unit_to_si(std::string_view unit) {
@@ -206,6 +246,9 @@ std::string validate_can_messages(const std::vector<CanMessageSpec>& messages) {
       e << path << ".id: 0x" << std::hex << msg.id << " is used by an earlier message";
       return e.str();
     }
+  }
+  for (size_t m = 0; m < messages.size(); ++m) {
+    if (std::string err = validate_time_link(messages, m); !err.empty()) return err;
   }
   return {};
 }
@@ -286,6 +329,40 @@ CanSignalDecoder::CanSignalDecoder(std::vector<CanMessageSpec> messages)
   if (std::string err = validate_can_messages(messages_); !err.empty()) {
     throw std::invalid_argument("CAN message table: " + err);
   }
+  time_links_.resize(messages_.size());
+  for (size_t m = 0; m < messages_.size(); ++m) {
+    const CanMessageSpec& msg = messages_[m];
+    if (msg.time_from.empty()) continue;
+    const CanMessageSpec* source = find(msg.time_from);
+    time_links_[m] = TimeLink{static_cast<size_t>(source - messages_.data()),
+                              find_signal(*source, msg.time_match),
+                              find_signal(msg, msg.time_match),
+                              {}};
+  }
+}
+
+void CanSignalDecoder::remember_time(const CanMessageSpec& source, std::span<const uint8_t> data,
+                                     int64_t sensor_time_us) {
+  const auto source_index = static_cast<size_t>(&source - messages_.data());
+  for (std::optional<TimeLink>& link : time_links_) {
+    if (!link || link->source != source_index) continue;
+    std::copy_backward(link->tags.begin(), link->tags.end() - 1, link->tags.end());
+    link->tags[0] = TimeTag{can_extract_raw(*link->match_in_source, data), sensor_time_us, true};
+  }
+}
+
+void CanSignalDecoder::apply_time_link(const CanMessageSpec& message, std::span<const uint8_t> data,
+                                       CanDecodedMessage& out) const {
+  const std::optional<TimeLink>& link =
+      time_links_[static_cast<size_t>(&message - messages_.data())];
+  if (!link) return;
+  const uint64_t raw = can_extract_raw(*link->match_in_message, data);
+  for (const TimeTag& tag : link->tags) {  // newest first
+    if (tag.used && tag.match_raw == raw) {
+      out.time.sensor_time_us = tag.sensor_time_us;
+      return;
+    }
+  }
 }
 
 const CanMessageSpec* CanSignalDecoder::find(uint32_t id, bool extended) const {
@@ -342,6 +419,11 @@ bool CanSignalDecoder::decode(uint32_t id, bool extended, std::span<const uint8_
       out.time.sensor_time_us = std::llround(*v.value_si * 1e6);
     }
     out.signals.push_back(v);
+  }
+  if (out.time.sensor_time_us) {
+    remember_time(*spec, data, *out.time.sensor_time_us);
+  } else {
+    apply_time_link(*spec, data, out);
   }
   if (any_out_of_range) ++stats_.out_of_range;
   ++stats_.records;

@@ -153,7 +153,9 @@ CanSignalSpec parse_signal(const YAML::Node& node, const std::string& path) {
 
 CanMessageSpec parse_message(const YAML::Node& node, const std::string& path) {
   if (!node.IsMap()) fail(path, "must be a map");
-  check_keys(node, path, {"name", "id", "extended", "dlc", "multiplexer", "signals"});
+  check_keys(
+      node, path,
+      {"name", "id", "extended", "dlc", "multiplexer", "signals", "time_from", "time_match"});
   CanMessageSpec m;
   m.name = scalar_at(node, "name", path, true).Scalar();
   m.id = static_cast<uint32_t>(
@@ -163,6 +165,8 @@ CanMessageSpec parse_message(const YAML::Node& node, const std::string& path) {
   }
   m.dlc = static_cast<uint8_t>(parse_int(scalar_at(node, "dlc", path, true), path + ".dlc", 0, 8));
   if (auto n = scalar_at(node, "multiplexer", path, false)) m.multiplexer = n.Scalar();
+  if (auto n = scalar_at(node, "time_from", path, false)) m.time_from = n.Scalar();
+  if (auto n = scalar_at(node, "time_match", path, false)) m.time_match = n.Scalar();
   const YAML::Node signals = node["signals"];
   if (!signals) fail(path + ".signals", "missing");
   if (!signals.IsSequence()) fail(path + ".signals", "must be a list");

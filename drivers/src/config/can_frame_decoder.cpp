@@ -56,13 +56,16 @@ bool CanFrameDecoder::decode(const CanFrame& frame, CanDecodedMessage& out) {
   stats_ = decoder_.stats();
   stats_.unsupported += remote_frames_;
   if (!ok || !out.time.sensor_time_us) return ok;
-  const auto it = clocks_.find(out.spec);
+  // A message dated by another (time_from) is mapped with that message's clock, which only
+  // its own samples update.
+  const bool linked = !out.spec->time_from.empty();
+  const auto it = clocks_.find(linked ? decoder_.find(out.spec->time_from) : out.spec);
   if (it == clocks_.end()) return ok;
   ClockMapping& clock = *it->second;
   int64_t sensor_us = *out.time.sensor_time_us;
   const int64_t modulus = clock.options().sensor_modulus_us;
   if (modulus > 0) sensor_us = ((sensor_us % modulus) + modulus) % modulus;
-  clock.update(sensor_us, time.host.monotonic_us);
+  if (!linked) clock.update(sensor_us, time.host.monotonic_us);
   time_of_validity_us_ = clock.to_host_us(sensor_us);
   return ok;
 }

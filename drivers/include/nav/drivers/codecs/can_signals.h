@@ -17,6 +17,7 @@
 //
 // Pure: no I/O, no clocks, no allocation while decoding once the output was sized.
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -73,6 +74,12 @@ struct CanMessageSpec {
   /// Name of the multiplexer switch signal (DBC `M`), empty when not multiplexed.
   std::string multiplexer;
   std::vector<CanSignalSpec> signals;
+  /// For a message without its own time counter: the message whose time-of-validity signal
+  /// dates it (e.g. dvl_velocity <- dvl_time), matched by the raw value of the signal named
+  /// `time_match` that both carry (e.g. a ping sequence number). The time message must
+  /// arrive first; the latest kTimeTags time messages are remembered. Empty when unused.
+  std::string time_from;
+  std::string time_match;
 };
 
 /// Everything that can be wrong with a table of messages, or empty when it is valid. Errors
@@ -110,7 +117,8 @@ struct CanDecodedMessage {
   uint32_t id = 0;
   bool extended = false;
   /// Host receive time of the frame; sensor_time_us from the time-of-validity signal (the
-  /// sensor's own clock, wrapped as the counter wraps) when the message has one and it is valid.
+  /// sensor's own clock, wrapped as the counter wraps) when the message has one and it is
+  /// valid, or from the matching time message (CanMessageSpec::time_from).
   Timestamps time;
   std::optional<uint64_t> multiplexer_value;  ///< switch value for multiplexed messages
   std::vector<CanSignalValue> signals;        ///< present signals, in table order
@@ -142,7 +150,29 @@ class CanSignalDecoder {
   const DecodeStats& stats() const { return stats_; }
 
  private:
+  /// A remembered time message: raw value of a match signal and its sensor time.
+  struct TimeTag {
+    uint64_t match_raw = 0;
+    int64_t sensor_time_us = 0;
+    bool used = false;
+  };
+  static constexpr size_t kTimeTags = 4;
+  using TimeTags = std::array<TimeTag, kTimeTags>;
+  /// Per message index: for messages with time_from, the message index of the time source
+  /// and the signals matched in both; tags kept per dependent message, newest first.
+  struct TimeLink {
+    size_t source = 0;
+    const CanSignalSpec* match_in_source = nullptr;
+    const CanSignalSpec* match_in_message = nullptr;
+    TimeTags tags{};
+  };
+  void remember_time(const CanMessageSpec& source, std::span<const uint8_t> data,
+                     int64_t sensor_time_us);
+  void apply_time_link(const CanMessageSpec& message, std::span<const uint8_t> data,
+                       CanDecodedMessage& out) const;
+
   std::vector<CanMessageSpec> messages_;
+  std::vector<std::optional<TimeLink>> time_links_;  ///< by message index
   DecodeStats stats_;
 };
 

@@ -9,6 +9,8 @@
 //       extended: false           # optional, default false
 //       dlc: 8                    # data length 0..8; frames of another length are malformed
 //       multiplexer: beam_index   # optional: name of the multiplexer switch signal (DBC M)
+//       time_from: dvl_time       # optional: the (earlier) message whose time signal dates
+//       time_match: ping_seq      #   this one, matched by this signal present in both
 //       signals:
 //         - name: v_x_mps
 //           start_bit: 0          # DBC numbering: Intel -> LSB, Motorola -> MSB (sawtooth)

@@ -31,8 +31,9 @@ class CanFrameDecoder {
   /// remote frames count as unsupported. out.time.host.monotonic_us is the host time above.
   bool decode(const CanFrame& frame, CanDecodedMessage& out);
   /// Monotonic host time of validity of the message decoded last (its sensor time through
-  /// the message's clock mapping, which the decode updated); nullopt when the message has no
-  /// valid time signal or the mapping is not initialised yet.
+  /// the message's clock mapping, which the decode updated; for a message dated by another
+  /// (time_from), through that message's mapping); nullopt when the message has no valid
+  /// sensor time or the mapping is not initialised yet.
   std::optional<int64_t> time_of_validity_us() const { return time_of_validity_us_; }
 
   /// Clock mapping of a message with a time signal, nullptr otherwise.
