@@ -145,6 +145,9 @@ TEST_F(NavtoolParseCan, DecodesSimulatedDvlAndFogLog) {
     EXPECT_NEAR(v["signals"]["v_y_mps"].get<double>(), -vx[k], 0.5e-4);
     EXPECT_TRUE(v["signals"]["v_z_mps"].is_null());  // not sent: the invalid pattern
     EXPECT_EQ(v["signals"]["ping_seq"].get<int>(), k % 256);
+    // dvl_velocity is dated by the dvl_time message with the same ping_seq.
+    EXPECT_EQ(v["sensor_time_s"], t["sensor_time_s"]);
+    EXPECT_EQ(v["time_of_validity_unix_s"], t["time_of_validity_unix_s"]);
     if (k >= 100) {  // after 10 s of samples
       ASSERT_FALSE(t["time_of_validity_unix_s"].is_null());
       max_tov_error_s = std::max(max_tov_error_s,

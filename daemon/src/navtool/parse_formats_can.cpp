@@ -4,7 +4,7 @@
 // message per line:
 //   {"time_unix_s": log time stamp, "interface": "can0", "id": "0x200", "extended": false,
 //    "name": "dvl_velocity", "multiplexer": 2 (multiplexed messages only),
-//    "sensor_time_s": time-of-validity signal or null,
+//    "sensor_time_s": time-of-validity signal (or that of the time_from message) or null,
 //    "time_of_validity_unix_s": that sensor time mapped onto the log's clock or null,
 //    "signals": {"v_x_mps": 1.2345, "heading_deg": 12.3, "v_y_mps": null, ...}}
 // Signal values are SI; angles (rad, rad/s) are shown in degrees at this display edge with
@@ -90,16 +90,19 @@ class SensorClocks {
       }
     }
   }
-  /// Host (log) time of the message's sensor time, after adding it as a sample.
-  std::optional<int64_t> map(const drivers::CanDecodedMessage& msg) {
+  /// Host (log) time of the message's sensor time, after adding it as a sample; a message
+  /// dated by another (time_from) goes through that one's mapping without adding a sample.
+  std::optional<int64_t> map(const drivers::CanDecodedMessage& msg,
+                             const drivers::CanSignalDecoder& decoder) {
     if (!msg.time.sensor_time_us) return std::nullopt;
-    auto it = clocks_.find(msg.spec);
+    const bool linked = !msg.spec->time_from.empty();
+    auto it = clocks_.find(linked ? decoder.find(msg.spec->time_from) : msg.spec);
     if (it == clocks_.end()) return std::nullopt;
     drivers::ClockMapping& clock = *it->second;
     int64_t sensor_us = *msg.time.sensor_time_us;
     const int64_t modulus = clock.options().sensor_modulus_us;
     if (modulus > 0) sensor_us = ((sensor_us % modulus) + modulus) % modulus;
-    clock.update(sensor_us, msg.time.host.realtime_us);
+    if (!linked) clock.update(sensor_us, msg.time.host.realtime_us);
     return clock.to_host_us(sensor_us);
   }
 
@@ -158,7 +161,7 @@ void run_can(std::istream& in, std::ostream& records, drivers::DecodeStats& stat
       frames.dropped_bytes += f.line_bytes;
       return;
     }
-    records << message_to_json(msg, f, clocks.map(msg)).dump() << '\n';
+    records << message_to_json(msg, f, clocks.map(msg, decoder)).dump() << '\n';
   };
   std::vector<uint8_t> chunk(kChunkBytes);
   while (in) {
