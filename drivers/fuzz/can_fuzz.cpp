@@ -1,9 +1,10 @@
 // libFuzzer target for the CAN codecs. The input is a candump text log: whole vs three-chunk
 // decoding must agree and the counters add up; every parsed frame must survive
 // format -> parse unchanged; frames are decoded with a fixed signal table (Intel and Motorola,
-// signed, odd lengths, multiplexed, time counter), and every decoded value must re-encode to
-// the same raw bits; sensor times feed a ClockMapping whose outputs must stay finite. The
-// bytes are also read directly as (id, length, payload) records for the signal decoder.
+// signed, odd lengths, multiplexed, time counter, a message dated by another), and every decoded
+// value must re-encode to the same raw bits; sensor times feed a ClockMapping whose outputs
+// must stay finite. The bytes are also read directly as (id, length, payload) records for the
+// signal decoder.
 #include <cmath>
 #include <cstdlib>
 #include <span>
@@ -52,6 +53,9 @@ std::vector<CanMessageSpec> table() {
   moto.signals = {sig("temp", 0, 12, kM, true, 0.01, "K"), sig("r", 6, 6, kM, false, 0.1, "m"),
                   sig("en", 7, 1, kM, false, 1, "")};
   moto.signals[0].offset = 250;
+  moto.signals.push_back(sig("seq", 24, 8, kI, false, 1, ""));  // dated by "us" (time_from)
+  moto.time_from = "us";
+  moto.time_match = "seq";
   CanMessageSpec mux{"mux", 0x202, false, 4, "sel", {}, "", ""};
   mux.signals = {sig("sel", 0, 2, kI, false, 1, ""), sig("a", 2, 29, kI, false, 1, "mm"),
                  sig("b", 2, 13, kI, true, 0.5, "cm"), sig("c", 31, 1, kI, false, 1, "")};
@@ -60,6 +64,7 @@ std::vector<CanMessageSpec> table() {
   mux.signals[2].invalid_raw = 0x1000;
   CanMessageSpec us{"us", 0x18FF1003, true, 4, "", {sig("t", 7, 16, kM, false, 1.0, "us")}, "", ""};
   us.signals[0].time_of_validity = true;
+  us.signals.push_back(sig("seq", 23, 8, kM, false, 1, ""));
   return {dvl, fog, moto, mux, us};
 }
 
