@@ -26,21 +26,35 @@ double relative(double residual, double rhs) { return rhs > 0.0 ? residual / rhs
 
 void CsrOperator::multiply(const Eigen::Ref<const Eigen::MatrixXd>& X,
                            Eigen::Ref<Eigen::MatrixXd> Y) const {
-  // Row-major sparse times column-major dense: one pass over Λ per column keeps the row's
-  // indices and values in L1 while the column of X is gathered.
+  // One pass over Λ for all columns: X is copied to row-major so that the m values of row j
+  // of X are contiguous and each nonzero updates m accumulators (a column-at-a-time product
+  // would stream the whole matrix from memory m times).
+  constexpr Eigen::Index kMaxColumns = 16;
   const Eigen::Index n = lambda_.rows();
+  const Eigen::Index m = X.cols();
+  if (m > kMaxColumns) {
+    Y.noalias() = lambda_ * X;
+    return;
+  }
+  thread_local Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> xt, yt;
+  xt = X;
+  yt.resize(n, m);
   const int* outer = lambda_.outerIndexPtr();
   const int* inner = lambda_.innerIndexPtr();
   const double* values = lambda_.valuePtr();
-  for (Eigen::Index c = 0; c < X.cols(); ++c) {
-    const double* x = X.col(c).data();
-    double* y = Y.col(c).data();
-    for (Eigen::Index i = 0; i < n; ++i) {
-      double sum = 0.0;
-      for (int k = outer[i]; k < outer[i + 1]; ++k) sum += values[k] * x[inner[k]];
-      y[i] = sum;
+  const double* x = xt.data();
+  double sum[kMaxColumns];
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (Eigen::Index c = 0; c < m; ++c) sum[c] = 0.0;
+    for (int k = outer[i]; k < outer[i + 1]; ++k) {
+      const double v = values[k];
+      const double* xj = x + Eigen::Index{inner[k]} * m;
+      for (Eigen::Index c = 0; c < m; ++c) sum[c] += v * xj[c];
     }
+    double* yi = yt.data() + i * m;
+    for (Eigen::Index c = 0; c < m; ++c) yi[c] = sum[c];
   }
+  Y = yt;
 }
 
 Status BlockJacobiPreconditioner::invert_block(int index,
