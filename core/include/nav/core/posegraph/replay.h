@@ -18,6 +18,10 @@
 //   * every other edge (j, k), j < k, is a camera link: it tightens the bound of j (propose +
 //     Kalman update, before the filter sees it) and then updates the filter (binary
 //     RelativePose6Model update).
+// Bounds timing: the recovery of step k runs after the prediction and before k's links (link
+// proposal needs the pre-registration joint); the bound stored for vertex k when it becomes a
+// delayed state (step k+1) is the robot bound of step k, i.e. before k's own links (certified,
+// slightly looser than after them).
 // Linearisation: at the file's estimates throughout (the filter's mean is the file estimate;
 // f(μ) of each prediction is the file's pose of the new vertex).
 //

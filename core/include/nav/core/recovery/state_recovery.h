@@ -93,8 +93,9 @@ class StateRecovery {
   /// Appends a delayed copy of the robot (no prediction): new rows equal the robot's.
   Status extend_for_augmentation(int new_block);
 
-  /// Solves on a CSR snapshot of Λ (both triangles) and η, from the current warm start. On an
-  /// error the warm start is left as it was (CG) and status says why.
+  /// Solves on a CSR snapshot of Λ (both triangles) and η, from the current warm start. On a
+  /// size or preconditioner error the warm start is left as it was; after a CG breakdown
+  /// (operator not SPD) it holds the iterate reached. status says why.
   RecoveryResult solve(const CsrMatrix& lambda, const Eigen::VectorXd& eta);
   /// Same on the filter's block matrix directly (InformationMatrix::multiply). kDirect
   /// converts to a sparse matrix first.
