@@ -103,8 +103,13 @@ std::array<double, 3> read_vec3(const YamlReader& r, double limit, double scale)
   std::array<double, 3> out{};
   for (std::size_t i = 0; i < 3; ++i) {
     const double v = items[i].as_double();
-    if (std::abs(v) > limit)
-      items[i].fail("|" + std::to_string(v) + "| exceeds " + std::to_string(limit));
+    if (std::abs(v) > limit) {
+      std::string reason = "|";
+      reason += std::to_string(v);
+      reason += "| exceeds ";
+      reason += std::to_string(limit);
+      items[i].fail(reason);
+    }
     out[i] = v * scale;
   }
   return out;

@@ -31,7 +31,12 @@ std::string number_text(double v) {
 }  // namespace
 
 std::string range_text(double lo, double hi) {
-  return "[" + number_text(lo) + ", " + number_text(hi) + "]";
+  std::string text = "[";
+  text += number_text(lo);
+  text += ", ";
+  text += number_text(hi);
+  text += "]";
+  return text;
 }
 
 void YamlReader::fail(const std::string& reason) const {
@@ -51,7 +56,8 @@ void YamlReader::expect_map(std::initializer_list<std::string_view> allowed) con
     std::string list;
     for (std::string_view name : allowed) {
       known = known || key == name;
-      list += list.empty() ? std::string(name) : ", " + std::string(name);
+      if (!list.empty()) list += ", ";
+      list += name;
     }
     if (!known) throw ConfigError(*source_, child_path(key), "unknown key (allowed: " + list + ")");
   }

@@ -55,7 +55,8 @@ class YamlReader {
         out = value;
         return;
       }
-      allowed += allowed.empty() ? std::string(name) : ", " + std::string(name);
+      if (!allowed.empty()) allowed += ", ";
+      allowed += name;
     }
     child.fail("'" + text + "' is not one of: " + allowed);
   }

@@ -93,12 +93,12 @@ enum class Trigger { kFreeRun, kSoftware, kHardware };
 
 /// Pinhole calibration with OpenCV distortion order (k1 k2 p1 p2 [k3 [k4 k5 k6]]).
 struct CameraConfig {
-  double fx_px = 0.0, fy_px = 0.0;  ///< required, > 0
-  double cx_px = 0.0, cy_px = 0.0;  ///< required, >= 0
+  double fx_px = 0.0, fy_px = 0.0;  ///< required, [1e-3, 1e6]
+  double cx_px = 0.0, cy_px = 0.0;  ///< required, [0, 1e5]
   std::vector<double> distortion;   ///< 0, 4, 5 or 8 coefficients
   PixelFormat pixel_format = PixelFormat::kMono8;
   Trigger trigger = Trigger::kFreeRun;
-  double frame_rate_hz = 1.0;  ///< images per second (0, 100]
+  double frame_rate_hz = 1.0;  ///< images per second [1e-3, 100]
 };
 
 struct SensorConfig {
@@ -114,12 +114,12 @@ struct FilterConfig {
   core::ConstantVelocityOptions process_noise;  ///< process_noise_psd.{accel, angular_accel}
   int cg_iterations_per_step = 5;               ///< [1, 1000]
   double latency_window_ms = 200.0;             ///< [0, 60000]
-  double gating_chi2_threshold = 16.81;         ///< (0, 1e6]; 16.81 = chi2(6 dof, 99 %)
+  double gating_chi2_threshold = 16.81;         ///< [1e-6, 1e6]; 16.81 = chi2(6 dof, 99 %)
 };
 
 struct LcmChannel {
   std::string name;      ///< channel name, non-empty
-  double rate_hz = 1.0;  ///< publish rate (0, 1000]
+  double rate_hz = 1.0;  ///< publish rate [1e-3, 1000]
 };
 struct LcmConfig {
   std::string url = "udpm://239.255.76.67:7667?ttl=0";
@@ -130,7 +130,7 @@ struct LcmConfig {
 
 struct CheckpointConfig {
   std::string path = "/var/lib/navd/checkpoints";  ///< directory
-  double period_s = 60.0;                          ///< (0, 86400]
+  double period_s = 60.0;                          ///< [1e-3, 86400]
   int keep = 3;                                    ///< newest K kept, [1, 100]
 };
 
