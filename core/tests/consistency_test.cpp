@@ -78,6 +78,10 @@ TEST(Consistency, LogdetRatioSignAndValue) {
   indefinite(2, 2) = -1.0;
   EXPECT_THROW(logdet_ratio(indefinite, I), std::invalid_argument);
   EXPECT_THROW(logdet_ratio(I, indefinite), std::invalid_argument);
+  // Mixed fixed/dynamic arguments resolve to the one Ref overload.
+  const Eigen::MatrixXd dynamic = 3.0 * Eigen::MatrixXd::Identity(6, 6);
+  EXPECT_NEAR(logdet_ratio(dynamic, I), 6.0 * std::log(3.0), 1e-12);
+  EXPECT_THROW(logdet_ratio(Eigen::MatrixXd::Identity(3, 3), I), std::invalid_argument);
 }
 
 TEST(Consistency, SummaryStats) {

@@ -47,9 +47,14 @@ Mat6 relative_pose_covariance(const Mat12& joint, const Vec6& x_r, const Vec6& x
 }
 
 namespace {
-double logdet_spd(const Eigen::MatrixXd& m, const char* name) {
+double logdet_spd(const Eigen::Ref<const Eigen::MatrixXd>& m, const char* name) {
+  if (m.rows() != m.cols() || m.rows() == 0) {
+    throw std::invalid_argument(std::string("logdet_ratio: ") + name + " is " +
+                                std::to_string(m.rows()) + "x" + std::to_string(m.cols()) +
+                                ", not square and non-empty");
+  }
   const Eigen::LLT<Eigen::MatrixXd> llt(m);
-  if (m.rows() != m.cols() || llt.info() != Eigen::Success) {
+  if (llt.info() != Eigen::Success) {
     throw std::invalid_argument(std::string("logdet_ratio: ") + name +
                                 " is not symmetric positive definite");
   }
@@ -57,15 +62,12 @@ double logdet_spd(const Eigen::MatrixXd& m, const char* name) {
 }
 }  // namespace
 
-double logdet_ratio(const Eigen::MatrixXd& ours, const Eigen::MatrixXd& exact) {
+double logdet_ratio(const Eigen::Ref<const Eigen::MatrixXd>& ours,
+                    const Eigen::Ref<const Eigen::MatrixXd>& exact) {
   if (ours.rows() != exact.rows() || ours.cols() != exact.cols()) {
     throw std::invalid_argument("logdet_ratio: sizes differ");
   }
   return logdet_spd(ours, "ours") - logdet_spd(exact, "exact");
-}
-
-double logdet_ratio(const Mat6& ours, const Mat6& exact) {
-  return logdet_ratio(Eigen::MatrixXd(ours), Eigen::MatrixXd(exact));
 }
 
 SummaryStats summarize(std::vector<double> values) {

@@ -28,11 +28,11 @@ bool is_conservative(const Eigen::MatrixXd& bound, const Eigen::MatrixXd& exact,
 Mat6 relative_pose_covariance(const Mat12& joint, const Vec6& x_r, const Vec6& x_i);
 
 /// log det(ours) - log det(exact) (paper Fig. 3): positive = ours is larger in volume
-/// (conservative-looking), negative = over-confident. Both must be SPD (computed from LLT
-/// diagonals; throws std::invalid_argument if either is not positive definite).
-double logdet_ratio(const Mat6& ours, const Mat6& exact);
-/// Same for any square size.
-double logdet_ratio(const Eigen::MatrixXd& ours, const Eigen::MatrixXd& exact);
+/// (conservative-looking), negative = over-confident. Any square size (Mat6 for poses); both
+/// must be SPD (computed from LLT diagonals; throws std::invalid_argument otherwise or when the
+/// sizes differ). One Ref signature, so Mat6, MatrixXd and blocks mix without ambiguity.
+double logdet_ratio(const Eigen::Ref<const Eigen::MatrixXd>& ours,
+                    const Eigen::Ref<const Eigen::MatrixXd>& exact);
 
 /// min / median / max (median of an even count = mean of the two middle values) and count.
 struct SummaryStats {
