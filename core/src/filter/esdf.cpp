@@ -18,8 +18,10 @@ using Segment = BlockVector::Segment;
 using BlockByMeas = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 12,
                                   kMaxMeasDim>;
 
-Status invalid(const std::string& where, const std::string& what) {
-  return Status::Error(StatusCode::kInvalidArgument, where + ": " + what);
+// `where` is a const char* throughout: building a std::string on the success path would
+// allocate (names longer than the small-string buffer) in the real-time predict/update.
+Status invalid(const char* where, const std::string& what) {
+  return Status::Error(StatusCode::kInvalidArgument, std::string(where) + ": " + what);
 }
 
 /// Position (row, col) of the first non-finite entry, or (-1, -1). 2-D indexing, so it is
@@ -35,7 +37,7 @@ std::pair<Eigen::Index, Eigen::Index> first_non_finite(const M& m) {
 }
 
 template <class M>
-Status check_finite(const M& m, const std::string& where, const char* name) {
+Status check_finite(const M& m, const char* where, const char* name) {
   const auto [r, c] = first_non_finite(m);
   if (r < 0) return Status::Ok();
   std::ostringstream os;
@@ -45,7 +47,7 @@ Status check_finite(const M& m, const std::string& where, const char* name) {
 }
 
 template <class M>
-Status check_shape(const M& m, Eigen::Index rows, Eigen::Index cols, const std::string& where,
+Status check_shape(const M& m, Eigen::Index rows, Eigen::Index cols, const char* where,
                    const char* name) {
   if (m.rows() == rows && m.cols() == cols) return Status::Ok();
   std::ostringstream os;
@@ -55,16 +57,17 @@ Status check_shape(const M& m, Eigen::Index rows, Eigen::Index cols, const std::
 
 /// Symmetric (to 1e-9 relative) and positive definite (LLT succeeds).
 template <class M, class Llt>
-Status check_spd(const M& m, const std::string& where, const char* name, Llt* llt) {
+Status check_spd(const M& m, const char* where, const char* name, Llt* llt) {
   const double scale = std::max(1.0, m.cwiseAbs().maxCoeff());
   if ((m - m.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) {
     return Status::Error(StatusCode::kNotPositiveDefinite,
-                         where + ": " + name + " is not symmetric");
+                         std::string(where) + ": " + name + " is not symmetric");
   }
   llt->compute(m);
   if (llt->info() != Eigen::Success) {
     return Status::Error(StatusCode::kNotPositiveDefinite,
-                         where + ": " + name + " is not positive definite (Cholesky failed)");
+                         std::string(where) + ": " + name +
+                             " is not positive definite (Cholesky failed)");
   }
   return Status::Ok();
 }
@@ -102,7 +105,7 @@ Status Esdf::check_block(int block, const char* where) const {
 }
 
 Status Esdf::initialize(const Eigen::VectorXd& x0, const Eigen::MatrixXd& P0) {
-  const std::string where = "Esdf::initialize";
+  const char* where = "Esdf::initialize";
   const int d = block_dim();
   if (Status s = check_shape(x0, d, 1, where, "x0"); !s.ok()) return s;
   if (Status s = check_shape(P0, d, d, where, "P0"); !s.ok()) return s;
@@ -147,9 +150,9 @@ Status Esdf::predict(const Eigen::Ref<const Eigen::VectorXd>& f_of_mean,
                      const Eigen::Ref<const Eigen::MatrixXd>& F,
                      const Eigen::Ref<const Eigen::MatrixXd>& Q, bool keep_current,
                      int* kept_block) {
-  const std::string where = "Esdf::predict";
+  const char* where = "Esdf::predict";
   if (!initialized()) {
-    return Status::Error(StatusCode::kUnknownState, where + ": filter not initialised");
+    return Status::Error(StatusCode::kUnknownState, std::string(where) + ": filter not initialised");
   }
   const int d = block_dim();
   if (Status s = check_shape(f_of_mean, d, 1, where, "f(mean)"); !s.ok()) return s;
@@ -196,7 +199,7 @@ Status Esdf::predict(const Eigen::Ref<const Eigen::VectorXd>& f_of_mean,
   Eigen::LLT<Block> o_llt(omega);
   if (o_llt.info() != Eigen::Success) {
     return Status::Error(StatusCode::kNumericalFailure,
-                         where + ": robot block information Λ_tt + FᵀQ⁻¹F is not positive "
+                         std::string(where) + ": robot block information Λ_tt + FᵀQ⁻¹F is not positive "
                                  "definite; cannot marginalise");
   }
   const Segment b = eta_.segment(kRobotBlock) - A.transpose() * c;
@@ -262,7 +265,7 @@ Status Esdf::predict(const ConstantVelocityModel& model, double dt_s, bool keep_
 Status Esdf::check_measurement(const MeasVec& z, const MeasVec& h, const MeasJac* H1,
                                const MeasJac* H2, const MeasCov& R, const char* where,
                                Eigen::LLT<MeasCov>* llt) const {
-  const std::string w = where;
+  const char* w = where;
   const Eigen::Index m = z.size();
   if (m < 1 || m > kMaxMeasDim) {
     return invalid(w, "z has " + std::to_string(m) + " rows, expected 1..6");
@@ -335,7 +338,7 @@ Status Esdf::update(int a, int b, const MeasVec& z, const MeasVec& h_at_mean, co
 }
 
 Status Esdf::set_mean(const Eigen::VectorXd& mean) {
-  const std::string where = "Esdf::set_mean";
+  const char* where = "Esdf::set_mean";
   if (mean.size() != info_.dim()) {
     return invalid(where, "mean has " + std::to_string(mean.size()) + " elements, filter has " +
                               std::to_string(info_.dim()));
@@ -346,20 +349,20 @@ Status Esdf::set_mean(const Eigen::VectorXd& mean) {
 }
 
 Status Esdf::recover_mean_direct() {
-  const std::string where = "Esdf::recover_mean_direct";
+  const char* where = "Esdf::recover_mean_direct";
   if (!initialized()) {
-    return Status::Error(StatusCode::kUnknownState, where + ": filter not initialised");
+    return Status::Error(StatusCode::kUnknownState, std::string(where) + ": filter not initialised");
   }
   const Eigen::SparseMatrix<double> L = info_.to_sparse();
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> chol(L);
   if (chol.info() != Eigen::Success) {
     return Status::Error(StatusCode::kNumericalFailure,
-                         where + ": CHOLMOD factorisation of Λ failed (not positive definite?)");
+                         std::string(where) + ": CHOLMOD factorisation of Λ failed (not positive definite?)");
   }
   const Eigen::VectorXd mu = chol.solve(eta_.dense());
   if (chol.info() != Eigen::Success || first_non_finite(mu).first >= 0) {
     return Status::Error(StatusCode::kNumericalFailure,
-                         where + ": CHOLMOD solve produced a non-finite mean");
+                         std::string(where) + ": CHOLMOD solve produced a non-finite mean");
   }
   mean_.assign(mu);
   return Status::Ok();
