@@ -73,8 +73,11 @@ TEST(MeasurementQueue, MultiThreadedProducersDeliverOrCountEverything) {
   constexpr int kPerProducer = 20000;
   MeasurementQueue q(256);
   std::vector<MeasurementQueue::Producer> producers;
-  for (int i = 0; i < kProducers; ++i)
-    producers.push_back(q.make_producer("p" + std::to_string(i)));
+  for (int i = 0; i < kProducers; ++i) {
+    std::string name = "p";  // (not "p" + to_string: GCC 12 -O3 -Wrestrict false positive)
+    name += std::to_string(i);
+    producers.push_back(q.make_producer(name));
+  }
 
   std::atomic<int> done{0};
   std::vector<std::thread> threads;
