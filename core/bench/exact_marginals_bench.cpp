@@ -7,7 +7,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Dense>
-
 #include <filesystem>
 #include <map>
 #include <string>
@@ -82,8 +81,8 @@ BENCHMARK_CAPTURE(BM_ExactMarginals, parking_garage, std::string("parking-garage
 BENCHMARK_CAPTURE(BM_ExactMarginals, sphere2500, std::string("sphere2500"),
                   MarginalsOrdering::kBlockAmd)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_ExactMarginals, parking_garage_cholmod_ordering,
-                  std::string("parking-garage"), MarginalsOrdering::kCholmodAuto)
+BENCHMARK_CAPTURE(BM_ExactMarginals, parking_garage_cholmod_ordering, std::string("parking-garage"),
+                  MarginalsOrdering::kCholmodAuto)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_ExactMarginals, sphere2500_cholmod_ordering, std::string("sphere2500"),
                   MarginalsOrdering::kCholmodAuto)

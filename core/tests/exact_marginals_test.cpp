@@ -7,7 +7,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Dense>
-
 #include <random>
 #include <set>
 #include <utility>
@@ -95,8 +94,8 @@ TEST(ExactMarginals, RandomSparseMatchesDenseInverse) {
   };
   for (const Case c : {Case{1, 6, 0}, Case{10, 1, 5}, Case{40, 3, 30}, Case{60, 6, 40},
                        Case{30, 12, 25}, Case{80, 2, 200}}) {
-    SCOPED_TRACE(::testing::Message() << c.blocks << " blocks of " << c.d << ", " << c.extra
-                                    << " extra links");
+    SCOPED_TRACE(::testing::Message()
+                 << c.blocks << " blocks of " << c.d << ", " << c.extra << " extra links");
     const auto A = random_block_spd(c.blocks, c.d, c.extra, 17u + c.blocks);
     expect_matches_dense(A, c.d, MarginalsOrdering::kBlockAmd, 1e-10);
     expect_matches_dense(A, c.d, MarginalsOrdering::kCholmodAuto, 1e-10);

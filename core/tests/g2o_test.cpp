@@ -7,7 +7,6 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
-
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -26,8 +25,7 @@ using nav::testing::numeric_jacobian;
 
 constexpr double kPi = std::numbers::pi;
 
-const std::string kIdentityInfo =
-    " 1 0 0 0 0 0  1 0 0 0 0  1 0 0 0  1 0 0  1 0  1";
+const std::string kIdentityInfo = " 1 0 0 0 0 0  1 0 0 0 0  1 0 0 0  1 0 0  1 0  1";
 
 PoseGraph parse(const std::string& text) {
   std::istringstream in(text);
@@ -64,8 +62,8 @@ std::string vertex_line(int id, const Vec6& pose) {
 TEST(G2o, VertexQuaternionBecomesZyxEuler) {
   // 90 deg heading: q = (cos 45, 0, 0, sin 45).
   const double h = std::sqrt(0.5);
-  const PoseGraph g = parse("VERTEX_SE3:QUAT 0 1 2 3 0 0 " + std::to_string(h) + " " +
-                            std::to_string(h) + "\n");
+  const PoseGraph g =
+      parse("VERTEX_SE3:QUAT 0 1 2 3 0 0 " + std::to_string(h) + " " + std::to_string(h) + "\n");
   ASSERT_EQ(g.vertices.size(), 1u);
   EXPECT_NEAR(g.vertices[0].pose[0], 1.0, 0);
   EXPECT_NEAR(g.vertices[0].pose[2], 3.0, 0);
@@ -108,8 +106,8 @@ TEST(G2o, EdgeInformationIsConvertedToEulerParameters) {
   const Eigen::Quaterniond q = quaternion_of(x1.tail<3>());
   std::ostringstream edge;
   edge.precision(17);
-  edge << "EDGE_SE3:QUAT 0 1 1 0.2 -0.1 " << q.x() << " " << q.y() << " " << q.z() << " "
-       << q.w() << " 100 0 0 0 0 0 100 0 0 0 0 100 0 0 0 400 0 0 400 0 400\n";
+  edge << "EDGE_SE3:QUAT 0 1 1 0.2 -0.1 " << q.x() << " " << q.y() << " " << q.z() << " " << q.w()
+       << " 100 0 0 0 0 0 100 0 0 0 0 100 0 0 0 400 0 0 400 0 400\n";
   const PoseGraph g = parse(vertex_line(0, x0) + vertex_line(1, x1) + edge.str());
   ASSERT_EQ(g.edges.size(), 1u);
   const G2oEdge& e = g.edges[0];
@@ -172,19 +170,19 @@ TEST(G2o, MalformedInputNamesLineAndReason) {
   expect_error(v0 + "EDGE_SE3:QUAT 0 0 0 0 0 0 0 0 1" + kIdentityInfo + "\n", 2,
                "edge from vertex 0 to itself");
   // Indefinite information (I11 = -1) and a singular one (all zero).
-  expect_error(v0 + v1 + "EDGE_SE3:QUAT 0 1 0 0 0 0 0 0 1 -1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n",
-               3, "not positive definite");
-  expect_error(v0 + v1 + "EDGE_SE3:QUAT 0 1 0 0 0 0 0 0 1 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0\n",
-               3, "not positive definite");
+  expect_error(
+      v0 + v1 + "EDGE_SE3:QUAT 0 1 0 0 0 0 0 0 1 -1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n", 3,
+      "not positive definite");
+  expect_error(
+      v0 + v1 + "EDGE_SE3:QUAT 0 1 0 0 0 0 0 0 1 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0\n", 3,
+      "not positive definite");
   // Errors on an edge line are reported even when the vertex appears later in the file.
   expect_error(v0 + "EDGE_SE3:QUAT 0 1 0 0 0 0 0 0 1" + kIdentityInfo + "\n" + "\n" + v1 +
                    "EDGE_SE3:QUAT 0 9 0 0 0 0 0 0 1" + kIdentityInfo + "\n",
                5, "edge to unknown vertex 9");
 }
 
-TEST(G2o, MissingFileIsAnError) {
-  EXPECT_THROW(read_g2o("/nonexistent/graph.g2o"), G2oError);
-}
+TEST(G2o, MissingFileIsAnError) { EXPECT_THROW(read_g2o("/nonexistent/graph.g2o"), G2oError); }
 
 TEST(G2o, ReadsThePublicGraphs) {
   NAV_REQUIRE_DATA(tiny, "posegraphs/tinyGrid3D.g2o");
@@ -195,8 +193,8 @@ TEST(G2o, ReadsThePublicGraphs) {
     std::filesystem::path path;
     size_t vertices, edges;
   };
-  for (const Expect& e : {Expect{tiny, 9, 11}, Expect{small, 125, 297},
-                          Expect{garage, 1661, 6275}, Expect{sphere, 2500, 4949}}) {
+  for (const Expect& e : {Expect{tiny, 9, 11}, Expect{small, 125, 297}, Expect{garage, 1661, 6275},
+                          Expect{sphere, 2500, 4949}}) {
     const PoseGraph g = read_g2o(e.path.string());
     EXPECT_EQ(g.vertices.size(), e.vertices) << e.path;
     EXPECT_EQ(g.edges.size(), e.edges) << e.path;

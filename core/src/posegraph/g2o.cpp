@@ -5,7 +5,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cerrno>
 #include <cmath>

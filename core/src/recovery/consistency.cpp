@@ -4,7 +4,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
@@ -24,8 +23,8 @@ bool is_conservative(const Eigen::MatrixXd& bound, const Eigen::MatrixXd& exact,
   }
   const Eigen::MatrixXd diff = 0.5 * (bound - exact + (bound - exact).transpose());
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> exact_eig(exact, Eigen::EigenvaluesOnly);
-  const double norm = std::max(exact_eig.eigenvalues().cwiseAbs().maxCoeff(),
-                               std::numeric_limits<double>::min());
+  const double norm =
+      std::max(exact_eig.eigenvalues().cwiseAbs().maxCoeff(), std::numeric_limits<double>::min());
   const double shift = tol * norm;
   if (min_eig != nullptr) {
     *min_eig = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(diff, Eigen::EigenvaluesOnly)

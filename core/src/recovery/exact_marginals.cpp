@@ -19,7 +19,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
-
 #include <algorithm>
 #include <chrono>
 #include <string>
@@ -50,8 +49,8 @@ void invert_lower_in_place(Eigen::Ref<Eigen::MatrixXd> T) {
   const Eigen::Index n1 = n / 2, n2 = n - n1;
   invert_lower_in_place(T.topLeftCorner(n1, n1));
   invert_lower_in_place(T.bottomRightCorner(n2, n2));
-  const Eigen::MatrixXd CB = T.bottomRightCorner(n2, n2).triangularView<Eigen::Lower>() *
-                             T.bottomLeftCorner(n2, n1);
+  const Eigen::MatrixXd CB =
+      T.bottomRightCorner(n2, n2).triangularView<Eigen::Lower>() * T.bottomLeftCorner(n2, n1);
   T.bottomLeftCorner(n2, n1).noalias() =
       -(CB * T.topLeftCorner(n1, n1).triangularView<Eigen::Lower>());
 }
@@ -60,7 +59,8 @@ void invert_lower_in_place(Eigen::Ref<Eigen::MatrixXd> T) {
 /// blocking, ~n^3/3 flops: with U = [[A 0]; [B C]],
 ///   U^T U = [[A^T A + B^T B, .]; [C^T B, C^T C]].
 /// The strict upper part of S is not written.
-void lower_gram_in_place(const Eigen::Ref<const Eigen::MatrixXd>& U, Eigen::Ref<Eigen::MatrixXd> S) {
+void lower_gram_in_place(const Eigen::Ref<const Eigen::MatrixXd>& U,
+                         Eigen::Ref<Eigen::MatrixXd> S) {
   const Eigen::Index n = U.rows();
   if (n <= 32) {
     const Eigen::MatrixXd lower = U.triangularView<Eigen::Lower>();
@@ -84,8 +84,8 @@ struct ExactMarginals::Impl {
   mutable cholmod_common common{};
   cholmod_factor* L = nullptr;
   std::unique_ptr<double[]> sigma;  // same layout as L->x; every entry written by invert()
-  std::vector<int> col_super;  // supernode of each (permuted) column
-  std::vector<int> inv_perm;   // inv_perm[original] = permuted
+  std::vector<int> col_super;       // supernode of each (permuted) column
+  std::vector<int> inv_perm;        // inv_perm[original] = permuted
   double factor_ms = 0.0;
   double inversion_ms = 0.0;
 
@@ -190,8 +190,8 @@ std::vector<int> block_ordering(const Eigen::SparseMatrix<double>& Lambda, int b
   std::vector<int> perm(static_cast<size_t>(n));
   for (int b = 0; b < nb; ++b) {
     for (int k2 = 0; k2 < block_dim; ++k2) {
-      perm[static_cast<size_t>(b * block_dim + k2)] = block_perm[static_cast<size_t>(b)] *
-                                                           block_dim + k2;
+      perm[static_cast<size_t>(b * block_dim + k2)] =
+          block_perm[static_cast<size_t>(b)] * block_dim + k2;
     }
   }
   return perm;
@@ -222,9 +222,10 @@ void ExactMarginals::Impl::factor(const Eigen::SparseMatrix<double>& Lambda,
   cholmod_factorize(A, L, &common);
   cholmod_free_sparse(&A, &common);
   if (common.status == CHOLMOD_NOT_POSDEF || L->minor < L->n) {
-    throw ExactMarginalsError("ExactMarginals: information matrix is not positive definite "
-                              "(non-positive pivot at permuted column " +
-                              std::to_string(L->minor) + " of " + std::to_string(n) + ")");
+    throw ExactMarginalsError(
+        "ExactMarginals: information matrix is not positive definite "
+        "(non-positive pivot at permuted column " +
+        std::to_string(L->minor) + " of " + std::to_string(n) + ")");
   }
   if (common.status < CHOLMOD_OK || !L->is_super || !L->is_ll) {
     throw ExactMarginalsError("ExactMarginals: CHOLMOD factorisation failed (status " +
@@ -398,9 +399,8 @@ Eigen::MatrixXd ExactMarginals::marginal(int block) const {
   Eigen::MatrixXd S(d, d);
   for (int c = 0; c < d; ++c) {
     for (int r = c; r < d; ++r) {
-      const std::ptrdiff_t off =
-          impl_->offset(impl_->inv_perm[static_cast<size_t>(block * d + r)],
-                        impl_->inv_perm[static_cast<size_t>(block * d + c)]);
+      const std::ptrdiff_t off = impl_->offset(impl_->inv_perm[static_cast<size_t>(block * d + r)],
+                                               impl_->inv_perm[static_cast<size_t>(block * d + c)]);
       // A diagonal block of Lambda is in the pattern of L unless Lambda stores explicit
       // structural zeros there; then the entry is not kept and is solved for below.
       if (off < 0) return joint(block, block).topLeftCorner(d, d);

@@ -4,7 +4,6 @@
 #include "nav/core/recovery/markov_blanket.h"
 
 #include <Eigen/Cholesky>
-
 #include <algorithm>
 #include <deque>
 #include <stdexcept>
@@ -93,8 +92,10 @@ std::vector<std::vector<int>> block_adjacency(const Eigen::SparseMatrix<double>&
                                               int block_dim) {
   if (block_dim < 1 || Lambda.rows() != Lambda.cols() || Lambda.rows() % block_dim != 0) {
     throw std::invalid_argument("block_adjacency: matrix " + std::to_string(Lambda.rows()) + "x" +
-                                std::to_string(Lambda.cols()) + " is not square or not a multiple "
-                                "of block_dim " + std::to_string(block_dim));
+                                std::to_string(Lambda.cols()) +
+                                " is not square or not a multiple "
+                                "of block_dim " +
+                                std::to_string(block_dim));
   }
   const Eigen::Index nb = Lambda.rows() / block_dim;
   Adjacency adjacency(static_cast<size_t>(nb));
@@ -115,8 +116,7 @@ std::vector<std::vector<int>> block_adjacency(const Eigen::SparseMatrix<double>&
   return adjacency;
 }
 
-std::vector<int> shortest_block_path(const std::vector<std::vector<int>>& adjacency, int r,
-                                     int i) {
+std::vector<int> shortest_block_path(const std::vector<std::vector<int>>& adjacency, int r, int i) {
   std::vector<int> parent(adjacency.size(), -1);
   std::deque<int> queue{r};
   parent[static_cast<size_t>(r)] = r;

@@ -23,12 +23,11 @@
 // Lines: blank lines and lines starting with '#' are ignored. Any other tag is an error.
 // All malformed input throws G2oError with "source:line: reason".
 
+#include <Eigen/SparseCore>
 #include <istream>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <Eigen/SparseCore>
 
 #include "nav/core/filter/information_matrix.h"
 #include "nav/core/geometry/types.h"
@@ -50,19 +49,19 @@ class G2oError : public std::runtime_error {
 };
 
 struct G2oVertex {
-  int id = 0;     ///< id in the file
-  Vec6 pose;      ///< [x y z roll pitch heading] of the vertex in the world frame
+  int id = 0;  ///< id in the file
+  Vec6 pose;   ///< [x y z roll pitch heading] of the vertex in the world frame
 };
 
 struct G2oEdge {
-  int from = 0;       ///< file id of vertex i (the edge measures j in the frame of i)
-  int to = 0;         ///< file id of vertex j
-  int from_index = 0; ///< index of vertex i in PoseGraph::vertices
-  int to_index = 0;   ///< index of vertex j in PoseGraph::vertices
-  Vec6 measurement;   ///< x_ij = [t_ij; rpy_ij] (tail_to_tail convention, geometry/pose.h)
-  Mat6 information;   ///< on our [x y z roll pitch heading] parameters (converted, see above)
+  int from = 0;          ///< file id of vertex i (the edge measures j in the frame of i)
+  int to = 0;            ///< file id of vertex j
+  int from_index = 0;    ///< index of vertex i in PoseGraph::vertices
+  int to_index = 0;      ///< index of vertex j in PoseGraph::vertices
+  Vec6 measurement;      ///< x_ij = [t_ij; rpy_ij] (tail_to_tail convention, geometry/pose.h)
+  Mat6 information;      ///< on our [x y z roll pitch heading] parameters (converted, see above)
   Mat6 information_g2o;  ///< as in the file, on g2o's [t; qvec] error
-  int line = 0;       ///< line number in the source (1-based)
+  int line = 0;          ///< line number in the source (1-based)
 };
 
 struct PoseGraph {

@@ -4,7 +4,6 @@
 // from their joint, and the log-determinant ratio the paper plots.
 
 #include <Eigen/Core>
-
 #include <vector>
 
 #include "nav/core/geometry/types.h"

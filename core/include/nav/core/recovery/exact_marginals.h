@@ -31,7 +31,6 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
-
 #include <memory>
 #include <stdexcept>
 

@@ -13,7 +13,6 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
-
 #include <vector>
 
 #include "nav/core/filter/information_matrix.h"
