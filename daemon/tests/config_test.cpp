@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <string>
 
@@ -84,6 +86,9 @@ TEST(Config, RovYamlLoads) {
   const auto* can = std::get_if<CanTransport>(&c.sensors[5].transport);
   ASSERT_NE(can, nullptr);
   EXPECT_EQ(can->interface, "can0");
+  // Relative to rov.yaml's directory, loaded and validated with the config.
+  EXPECT_EQ(can->signals_file, (config_dir() / "can/dvl_fog_example.yaml").string());
+  EXPECT_FALSE(can->signals.messages.empty());
   const auto* gige = std::get_if<GigeTransport>(&c.sensors[6].transport);
   ASSERT_NE(gige, nullptr);
   EXPECT_EQ(c.sensors[6].camera.trigger, Trigger::kHardware);
@@ -207,6 +212,26 @@ TEST(Config, SensorSemantics) {
   EXPECT_EQ(e.key_path(), "sensors");
   e = expect_error(std::string(kMinimal) + "lcm: {url: 'tcp://x'}\n");
   EXPECT_EQ(e.key_path(), "lcm.url");
+}
+
+TEST(Config, BadCanSignalTableStopsAtTheKey) {
+  const std::string table = testing::TempDir() + "navd_config_test_bad_can.yaml";
+  {
+    std::ofstream out(table);
+    out << "messages:\n  - {name: m, id: 0x100, dlc: 8, signals: [{name: s, start_bit: 0, "
+           "length: 0, byte_order: intel}]}\n";
+  }
+  const ConfigError e = expect_error(
+      "sensors:\n  - {name: c, type: dvl_can, transport: {type: can, interface: can0, "
+      "signals_file: " +
+      table + "}}\n");
+  EXPECT_EQ(e.key_path(), "sensors[0].transport.signals_file");
+  EXPECT_NE(e.reason().find("length"), std::string::npos) << e.what();
+  std::remove(table.c_str());
+  EXPECT_EQ(expect_error("sensors:\n  - {name: c, type: dvl_can, transport: {type: can, "
+                         "interface: can0, signals_file: /nonexistent/can.yaml}}\n")
+                .key_path(),
+            "sensors[0].transport.signals_file");
 }
 
 TEST(Config, NoiseInDegreesStoredInRadians) {

@@ -1,5 +1,6 @@
 // navd config: ConfigError, the top-level document and the filter / lcm / checkpoint sections.
 // Schema in config.h and config/README.md.
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -116,7 +117,8 @@ bool is_camera(SensorType type) {
   return type == SensorType::kCameraGige || type == SensorType::kCameraV4l2;
 }
 
-NavdConfig parse_config(const std::string& yaml_text, const std::string& source) {
+NavdConfig parse_config(const std::string& yaml_text, const std::string& source,
+                        const std::string& base_dir) {
   YAML::Node root;
   try {
     root = YAML::Load(yaml_text);
@@ -128,7 +130,7 @@ NavdConfig parse_config(const std::string& yaml_text, const std::string& source)
   const YamlReader doc(root, "", &source);
   doc.expect_map({"sensors", "filter", "lcm", "checkpoint"});
   NavdConfig config;
-  config.sensors = detail::parse_sensors(doc.at("sensors"));
+  config.sensors = detail::parse_sensors(doc.at("sensors"), base_dir);
   if (doc.has("filter")) config.filter = parse_filter(doc.at("filter"));
   if (doc.has("lcm")) config.lcm = parse_lcm(doc.at("lcm"));
   if (doc.has("checkpoint")) config.checkpoint = parse_checkpoint(doc.at("checkpoint"));
@@ -141,7 +143,7 @@ NavdConfig load_config_file(const std::string& path) {
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw ConfigError(path, "", "read error");
-  return parse_config(text.str(), path);
+  return parse_config(text.str(), path, std::filesystem::path(path).parent_path().string());
 }
 
 }  // namespace nav::daemon

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <filesystem>
 #include <numbers>
 
 #include "config_sections.h"
@@ -64,7 +65,19 @@ SerialTransport parse_serial(const YamlReader& t) {
   return serial;
 }
 
-Transport parse_transport(const YamlReader& sensor, SensorType type) {
+/// Resolves the signal table path and loads it; its errors are reported at the key.
+void load_can_signals(const YamlReader& t, CanTransport& can, const std::string& base_dir) {
+  std::filesystem::path file(can.signals_file);
+  if (file.is_relative() && !base_dir.empty()) file = std::filesystem::path(base_dir) / file;
+  can.signals_file = file.string();
+  try {
+    can.signals = drivers::load_can_config_file(can.signals_file);
+  } catch (const drivers::CanConfigError& e) {
+    t.at("signals_file").fail(e.what());
+  }
+}
+
+Transport parse_transport(const YamlReader& sensor, SensorType type, const std::string& base_dir) {
   const YamlReader t = sensor.at("transport");
   if (!t.node().IsMap()) t.fail("expected a mapping with a type key");
   const std::string kind = t.at("type").as_string();
@@ -83,6 +96,7 @@ Transport parse_transport(const YamlReader& sensor, SensorType type) {
     CanTransport can;
     t.read("interface", can.interface, true);
     t.read("signals_file", can.signals_file, true);
+    load_can_signals(t, can, base_dir);
     return can;
   }
   if (kind == "gige") {
@@ -192,12 +206,12 @@ CameraConfig parse_camera(const YamlReader& c) {
   return cam;
 }
 
-SensorConfig parse_sensor(const YamlReader& s) {
+SensorConfig parse_sensor(const YamlReader& s, const std::string& base_dir) {
   s.expect_map({"name", "type", "transport", "mount", "noise", "camera"});
   SensorConfig sensor;
   s.read("name", sensor.name, true);
   sensor.type = parse_type(s);
-  sensor.transport = parse_transport(s, sensor.type);
+  sensor.transport = parse_transport(s, sensor.type, base_dir);
   if (s.has("mount")) sensor.mount = parse_mount(s.at("mount"));
   if (s.has("noise")) sensor.noise = parse_noise(s.at("noise"), sensor.type);
   if (is_camera(sensor.type)) {
@@ -211,12 +225,12 @@ SensorConfig parse_sensor(const YamlReader& s) {
 
 }  // namespace
 
-std::vector<SensorConfig> parse_sensors(const YamlReader& list) {
+std::vector<SensorConfig> parse_sensors(const YamlReader& list, const std::string& base_dir) {
   std::vector<SensorConfig> sensors;
   const std::vector<YamlReader> items = list.elements();
   if (items.empty()) list.fail("at least one sensor is required");
   for (const YamlReader& item : items) {
-    SensorConfig sensor = parse_sensor(item);
+    SensorConfig sensor = parse_sensor(item, base_dir);
     for (const SensorConfig& other : sensors) {
       if (other.name == sensor.name)
         item.at("name").fail("duplicate sensor name '" + sensor.name + "'");

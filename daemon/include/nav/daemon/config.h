@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "nav/core/models/constant_velocity.h"
+#include "nav/drivers/config/can_config.h"
 
 namespace nav::daemon {
 
@@ -58,8 +59,10 @@ struct SerialTransport {
   FlowControl flow = FlowControl::kNone;  ///< none | rtscts | xonxoff
 };
 struct CanTransport {
-  std::string interface;     ///< required, e.g. can0
-  std::string signals_file;  ///< required, CAN signal table (config/can/*.yaml)
+  std::string interface;       ///< required, e.g. can0
+  std::string signals_file;    ///< required, CAN signal table (config/can/*.yaml); a relative path
+                               ///< is relative to the config file's directory
+  drivers::CanConfig signals;  ///< the table, loaded and validated with the config
 };
 struct GigeTransport {
   std::string camera_id;  ///< required, Aravis device id
@@ -141,9 +144,12 @@ struct NavdConfig {
   CheckpointConfig checkpoint;
 };
 
-/// Parses YAML text; `source` names it in errors. Throws ConfigError.
-NavdConfig parse_config(const std::string& yaml_text, const std::string& source = "<string>");
-/// Reads and parses a file (errors name the file). Throws ConfigError, also if unreadable.
+/// Parses YAML text; `source` names it in errors; relative file names in it (CAN signal tables)
+/// are resolved against `base_dir` (default: the working directory). Throws ConfigError.
+NavdConfig parse_config(const std::string& yaml_text, const std::string& source = "<string>",
+                        const std::string& base_dir = "");
+/// Reads and parses a file (errors name the file; relative paths in it are relative to its
+/// directory). Throws ConfigError, also if unreadable.
 NavdConfig load_config_file(const std::string& path);
 
 }  // namespace nav::daemon
