@@ -149,6 +149,7 @@ Eigen::SparseMatrix<double> InformationMatrix::to_sparse() const {
   const int d = block_dim_;
   const Eigen::Index n = dim();
   Eigen::SparseMatrix<double> S(n, n);
+  if (n == 0) return S;  // Eigen's reserve/makeCompressed read past an empty size vector
   // Column c of block column j holds, for every stored block (i, j), the column of Λ_ij; since
   // both halves are stored, row j's entries (j, i) give Λ_ij = Λ_jiᵀ.
   Eigen::VectorXi nnz_per_col(n);
