@@ -102,22 +102,7 @@ struct AltimeterDecoder::Impl {
   bool on_sentence(std::string_view sentence, const HostTime& received,
                    std::vector<AltimeterRecord>& out) {
     std::string_view body;
-    switch (ascii::check_nmea_sentence(sentence, body)) {
-      case ascii::SentenceCheck::kOk:
-        break;
-      case ascii::SentenceCheck::kBadChecksum:
-        ++stats.checksum_failures;
-        return false;
-      case ascii::SentenceCheck::kMalformed:
-        ++stats.malformed;
-        return false;
-      case ascii::SentenceCheck::kMissingChecksum:
-        if (format.require_checksum) {
-          ++stats.malformed;
-          return false;
-        }
-        break;
-    }
+    if (!ascii::accept_nmea_sentence(sentence, format.require_checksum, stats, body)) return false;
     const ascii::Fields f = ascii::split_fields(body);
     const std::string_view address = f[0];
     if (format.protocol == AltimeterProtocol::kValeportNmea && address == "PRVAT") {

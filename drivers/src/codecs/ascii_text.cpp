@@ -109,4 +109,25 @@ SentenceCheck check_nmea_sentence(std::string_view sentence, std::string_view& b
   return *expected == nmea_checksum(body) ? SentenceCheck::kOk : SentenceCheck::kBadChecksum;
 }
 
+bool accept_nmea_sentence(std::string_view sentence, bool require_checksum, DecodeStats& stats,
+                          std::string_view& body) {
+  switch (check_nmea_sentence(sentence, body)) {
+    case SentenceCheck::kOk:
+      return true;
+    case SentenceCheck::kBadChecksum:
+      ++stats.checksum_failures;
+      return false;
+    case SentenceCheck::kMalformed:
+      ++stats.malformed;
+      return false;
+    case SentenceCheck::kMissingChecksum:
+      if (require_checksum) {
+        ++stats.malformed;
+        return false;
+      }
+      return true;
+  }
+  return false;
+}
+
 }  // namespace nav::drivers::ascii

@@ -56,6 +56,12 @@ enum class SentenceCheck { kOk, kBadChecksum, kMalformed, kMissingChecksum };
 /// the body between the start character and '*' in `body`.
 SentenceCheck check_nmea_sentence(std::string_view sentence, std::string_view& body);
 
+/// check_nmea_sentence with the counting of the NMEA codecs: a bad checksum counts in
+/// `stats.checksum_failures`; a malformed sentence, or one without checksum when
+/// `require_checksum`, counts in `stats.malformed`. Returns whether `body` may be parsed.
+bool accept_nmea_sentence(std::string_view sentence, bool require_checksum, DecodeStats& stats,
+                          std::string_view& body);
+
 /// Line framer for protocols whose records are single text lines ended by CR, LF or CR LF
 /// (KVH, Paroscientific, plain altimeter strings). `on_line(std::string_view) -> bool` is called
 /// for each non-empty line without its terminator and returns whether the line became a record;

@@ -261,22 +261,7 @@ struct NmeaDecoder::Impl {
   bool on_sentence(std::string_view sentence, const HostTime& received,
                    std::vector<NmeaRecord>& out) {
     std::string_view body;
-    switch (ascii::check_nmea_sentence(sentence, body)) {
-      case ascii::SentenceCheck::kOk:
-        break;
-      case ascii::SentenceCheck::kBadChecksum:
-        ++stats.checksum_failures;
-        return false;
-      case ascii::SentenceCheck::kMalformed:
-        ++stats.malformed;
-        return false;
-      case ascii::SentenceCheck::kMissingChecksum:
-        if (options.require_checksum) {
-          ++stats.malformed;
-          return false;
-        }
-        break;
-    }
+    if (!ascii::accept_nmea_sentence(sentence, options.require_checksum, stats, body)) return false;
     Parsed parsed = parse_body(body, options);
     switch (parsed.outcome) {
       case Outcome::kRecord:
