@@ -21,7 +21,6 @@ namespace nav::tool {
 namespace {
 
 using nlohmann::json;
-constexpr std::size_t kChunkBytes = 4096;
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 
 /// Display value rounded to 1e-9 of its unit (finer than any of these protocols' resolution).
@@ -30,27 +29,12 @@ json opt(const std::optional<double>& v, double scale = 1.0) {
   return v ? num(*v, scale) : json(nullptr);
 }
 
-template <typename Feed>
-void read_chunks(std::istream& in, Feed feed) {
-  std::vector<uint8_t> chunk(kChunkBytes);
-  while (in) {
-    in.read(reinterpret_cast<char*>(chunk.data()), std::streamsize(chunk.size()));
-    const auto got = std::size_t(in.gcount());
-    if (got == 0) break;
-    feed(std::span<const uint8_t>(chunk.data(), got));
-  }
-}
-
 /// Runs `Decoder` over the stream, printing `to_json(record)` per record, adding its stats.
 template <typename Decoder, typename Record, typename ToJson>
 void run_decoder(Decoder decoder, std::istream& in, std::ostream& records,
                  drivers::DecodeStats& stats, ToJson to_json) {
-  std::vector<Record> out;
-  read_chunks(in, [&](std::span<const uint8_t> bytes) {
-    out.clear();
-    decoder.feed(bytes, drivers::HostTime{}, out);
-    for (const auto& r : out) records << to_json(r).dump() << '\n';
-  });
+  decode_stream<Record>(in, decoder,
+                        [&](const Record& r) { records << to_json(r).dump() << '\n'; });
   stats += decoder.stats();
 }
 

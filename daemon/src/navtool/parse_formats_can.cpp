@@ -36,7 +36,6 @@ namespace nav::tool {
 namespace {
 
 using nlohmann::json;
-constexpr std::size_t kChunkBytes = 4096;
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 
 /// Display value rounded to 1e-9 of its unit.
@@ -163,16 +162,7 @@ void run_can(std::istream& in, std::ostream& records, drivers::DecodeStats& stat
     }
     records << message_to_json(msg, f, clocks.map(msg, decoder)).dump() << '\n';
   };
-  std::vector<uint8_t> chunk(kChunkBytes);
-  while (in) {
-    in.read(reinterpret_cast<char*>(chunk.data()), std::streamsize(chunk.size()));
-    const auto got = std::size_t(in.gcount());
-    if (got == 0) break;
-    out.clear();
-    log.feed(std::span<const uint8_t>(chunk.data(), got), drivers::HostTime{}, out);
-    for (const auto& f : out) handle(f);
-  }
-  out.clear();
+  decode_stream<drivers::CanLogFrame>(in, log, handle);
   log.finish(drivers::HostTime{}, out);
   for (const auto& f : out) handle(f);
 

@@ -16,7 +16,6 @@ namespace nav::tool {
 namespace {
 
 using nlohmann::json;
-constexpr std::size_t kChunkBytes = 4096;
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 
 /// Display value rounded to 1e-6 of its unit (finer than any field's wire resolution), so that
@@ -34,18 +33,6 @@ json opt_array(const std::array<std::optional<double>, N>& values) {
   json a = json::array();
   for (const auto& v : values) a.push_back(opt(v));
   return a;
-}
-
-/// Reads `in` in chunks and hands every chunk to `feed(bytes)`.
-template <typename Feed>
-void read_chunks(std::istream& in, Feed feed) {
-  std::vector<uint8_t> chunk(kChunkBytes);
-  while (in) {
-    in.read(reinterpret_cast<char*>(chunk.data()), std::streamsize(chunk.size()));
-    const auto got = std::size_t(in.gcount());
-    if (got == 0) break;
-    feed(std::span<const uint8_t>(chunk.data(), got));
-  }
 }
 
 /// The decoder's counters with an incomplete record left at the end of the file counted as
@@ -86,11 +73,8 @@ json pd0_to_json(const drivers::Pd0Ensemble& e) {
 void run_pd0(std::istream& in, std::ostream& records, drivers::DecodeStats& stats,
              const ParseOptions&) {
   drivers::Pd0Decoder decoder;
-  std::vector<drivers::Pd0Ensemble> out;
-  read_chunks(in, [&](std::span<const uint8_t> bytes) {
-    out.clear();
-    decoder.feed(bytes, drivers::HostTime{}, out);
-    for (const auto& e : out) records << pd0_to_json(e).dump() << '\n';
+  decode_stream<drivers::Pd0Ensemble>(in, decoder, [&](const drivers::Pd0Ensemble& e) {
+    records << pd0_to_json(e).dump() << '\n';
   });
   stats += end_of_stream(decoder.stats(), decoder.buffered_bytes());
 }
@@ -123,12 +107,8 @@ json pd6_to_json(const drivers::Pd6Record& r) {
 void run_pd6(std::istream& in, std::ostream& records, drivers::DecodeStats& stats,
              const ParseOptions&) {
   drivers::Pd6Decoder decoder;
-  std::vector<drivers::Pd6Record> out;
-  read_chunks(in, [&](std::span<const uint8_t> bytes) {
-    out.clear();
-    decoder.feed(bytes, drivers::HostTime{}, out);
-    for (const auto& r : out) records << pd6_to_json(r).dump() << '\n';
-  });
+  decode_stream<drivers::Pd6Record>(
+      in, decoder, [&](const drivers::Pd6Record& r) { records << pd6_to_json(r).dump() << '\n'; });
   stats += end_of_stream(decoder.stats(), decoder.buffered_bytes());
 }
 
