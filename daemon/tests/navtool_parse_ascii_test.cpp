@@ -3,13 +3,13 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 #include <vector>
+
+#include "support/navtool_run.h"
 
 namespace {
 
@@ -36,24 +36,14 @@ fs::path write_file(const std::string& name, const std::string& bytes) {
 }
 
 ParseRun navtool_parse(const std::string& format, const fs::path& file) {
-  const fs::path err = temp_dir() / "stderr.txt";
-  const std::string command = std::string(NAVTOOL_PATH) + " parse --format " + format + " '" +
-                              file.string() + "' 2>'" + err.string() + "'";
+  const auto output =
+      nav::tool::test::run_navtool("parse --format " + format + " '" + file.string() + "'");
   ParseRun run;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) return run;
-  std::string out;
-  char buffer[4096];
-  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) out.append(buffer, n);
-  run.status = ::pclose(pipe);
-  std::istringstream lines(out);
-  for (std::string line; std::getline(lines, line);) {
+  run.status = output.exit_code;
+  for (const std::string& line : nav::tool::test::lines_of(output.out)) {
     if (!line.empty()) run.records.push_back(json::parse(line));
   }
-  std::ifstream err_in(err);
-  for (std::string line; std::getline(err_in, line);) {
-    if (line.rfind("{\"summary\"", 0) == 0) run.summary = json::parse(line)["summary"];
-  }
+  run.summary = nav::tool::test::summary_of(output.err);
   return run;
 }
 

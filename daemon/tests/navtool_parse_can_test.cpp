@@ -4,10 +4,8 @@
 // and the errors for a missing or broken signal table.
 
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -19,6 +17,7 @@
 #include "nav/drivers/codecs/can_signals.h"
 #include "nav/drivers/codecs/candump_log.h"
 #include "nav/drivers/config/can_config.h"
+#include "support/navtool_run.h"
 
 namespace {
 
@@ -38,25 +37,16 @@ struct NavtoolRun {
   std::string err;
 };
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 /// Runs navtool parse on `log`, returning exit status, stdout JSON lines and stderr.
 NavtoolRun navtool_parse(const fs::path& log, const std::string& extra_args) {
-  const fs::path dir = log.parent_path();
-  const std::string cmd = std::string(NAVTOOL_PATH) + " parse --format can '" + log.string() +
-                          "' " + extra_args + " > '" + (dir / "out.jsonl").string() + "' 2> '" +
-                          (dir / "err.txt").string() + "'";
+  const auto output =
+      nav::tool::test::run_navtool("parse --format can '" + log.string() + "' " + extra_args);
   NavtoolRun r;
-  const int raw = std::system(cmd.c_str());
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  std::istringstream out(read_text(dir / "out.jsonl"));
-  for (std::string line; std::getline(out, line);) r.records.push_back(json::parse(line));
-  r.err = read_text(dir / "err.txt");
+  r.status = output.exit_code;
+  for (const std::string& line : nav::tool::test::lines_of(output.out)) {
+    r.records.push_back(json::parse(line));
+  }
+  r.err = output.err;
   return r;
 }
 

@@ -1,18 +1,16 @@
 // Tests of `navtool parse` (the built navtool binary, NAVTOOL_PATH): one JSON record per line
 // on stdout, {"summary": ...} on stderr, non-zero exit for an unknown format or missing file.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "nav/testing/data.h"
+#include "support/navtool_run.h"
 
 namespace {
 
@@ -24,36 +22,13 @@ struct RunResult {
   std::string stderr_text;
 };
 
-std::string slurp(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 /// Runs navtool with `args` (already shell-quoted), capturing stdout lines and stderr.
 RunResult run_navtool(const std::string& args) {
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("navtool_parse_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const auto out = dir / "stdout", err = dir / "stderr";
-  const std::string command = std::string("'") + NAVTOOL_PATH + "' " + args + " >'" + out.string() +
-                              "' 2>'" + err.string() + "'";
-  const int status = std::system(command.c_str());
-  RunResult result;
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::istringstream lines(slurp(out));
-  for (std::string line; std::getline(lines, line);) result.stdout_lines.push_back(line);
-  result.stderr_text = slurp(err);
-  std::filesystem::remove_all(dir);
-  return result;
+  const auto run = nav::tool::test::run_navtool(args);
+  return {run.exit_code, nav::tool::test::lines_of(run.out), run.err};
 }
 
-json summary_of(const RunResult& r) {
-  const auto at = r.stderr_text.find("{\"summary\"");
-  if (at == std::string::npos) return json();
-  return json::parse(r.stderr_text.substr(at))["summary"];
-}
+json summary_of(const RunResult& r) { return nav::tool::test::summary_of(r.stderr_text); }
 
 TEST(NavtoolParse, Pd0RealRecordingOneLinePerEnsembleAndSummary) {
   NAV_REQUIRE_DATA(path, "dvl/RDI_withBT.000");
