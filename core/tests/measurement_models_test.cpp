@@ -16,15 +16,10 @@ using nav::testing::max_abs_diff;
 using nav::testing::numeric_jacobian;
 using test::deg;
 using test::kPi;
+using test::pose;
 
 constexpr int kSamples = 1000;
 constexpr double kJacobianTol = 1e-6;  // absolute, analytic vs central differences
-
-Vec6 pose(double x, double y, double z, double r, double p, double h) {
-  Vec6 v;
-  v << x, y, z, r, p, h;
-  return v;
-}
 
 template <class Model>
 std::vector<int> angle_rows(const Model& m) {

@@ -16,6 +16,7 @@ using nav::testing::max_abs_diff;
 using nav::testing::numeric_jacobian;
 using test::deg;
 using test::kPi;
+using test::pose;
 
 constexpr int kSamples = 1000;
 // Analytic vs central-difference Jacobian, absolute. Samples whose result pitch exceeds
@@ -28,12 +29,6 @@ bool regular_result(const Vec6& x) { return std::abs(x[kPitch]) <= deg(80); }
 void expect_pose_near(const Vec6& a, const Vec6& b, double tol, const char* what) {
   EXPECT_LT(pose_minus(a, b).cwiseAbs().maxCoeff(), tol)
       << what << "\n  got      " << a.transpose() << "\n  expected " << b.transpose();
-}
-
-Vec6 pose(double x, double y, double z, double r, double p, double h) {
-  Vec6 v;
-  v << x, y, z, r, p, h;
-  return v;
 }
 
 TEST(Pose, HeadToTailByHand) {

@@ -1,6 +1,6 @@
 #pragma once
-// Random poses and robot states for the geometry and model tests (fixed seeds), and the
-// numeric-Jacobian adaptors with angle-wrapped differences. Test-only.
+// Hand-written and random poses and robot states for the geometry and model tests (fixed seeds),
+// and the numeric-Jacobian adaptors with angle-wrapped differences. Test-only.
 
 #include <Eigen/Core>
 #include <cmath>
@@ -17,6 +17,13 @@ namespace nav::core::test {
 
 inline constexpr double kPi = std::numbers::pi;
 inline double deg(double d) { return d * kPi / 180.0; }
+
+/// Pose [x y z roll pitch heading] (m, rad) from its six components, for hand-written cases.
+inline Vec6 pose(double x, double y, double z, double r, double p, double h) {
+  Vec6 v;
+  v << x, y, z, r, p, h;
+  return v;
+}
 
 /// Random pose: position in [-10, 10] m, roll and heading in (-pi, pi], |pitch| <= 80 deg.
 inline Vec6 random_pose(std::mt19937_64& rng) {
