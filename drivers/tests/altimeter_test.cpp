@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "ascii_decode_support.h"
 #include "nav/drivers/codecs/nmea.h"
 
 namespace nav::drivers {
@@ -15,17 +16,10 @@ namespace {
 
 const HostTime kHost{9, 10};
 
-struct Result {
-  std::vector<AltimeterRecord> records;
-  DecodeStats stats;
-};
+using Result = test::DecodeResult<AltimeterRecord>;
 
 Result decode(const std::string& text, const AltimeterFormat& format) {
-  AltimeterDecoder decoder(format);
-  Result r;
-  decoder.feed({reinterpret_cast<const uint8_t*>(text.data()), text.size()}, kHost, r.records);
-  r.stats = decoder.stats();
-  return r;
+  return test::decode_text<AltimeterDecoder, AltimeterRecord>(text, format, kHost);
 }
 
 AltimeterFormat format_of(AltimeterProtocol protocol) {

@@ -8,23 +8,18 @@
 #include <string>
 #include <vector>
 
+#include "ascii_decode_support.h"
+
 namespace nav::drivers {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 const HostTime kHost{5, 6};
 
-struct Result {
-  std::vector<KvhRecord> records;
-  DecodeStats stats;
-};
+using Result = test::DecodeResult<KvhRecord>;
 
 Result decode(const std::string& text, KvhOptions options = {}) {
-  KvhDecoder decoder(options);
-  Result r;
-  decoder.feed({reinterpret_cast<const uint8_t*>(text.data()), text.size()}, kHost, r.records);
-  r.stats = decoder.stats();
-  return r;
+  return test::decode_text<KvhDecoder, KvhRecord>(text, options, kHost);
 }
 
 std::string describe(const std::vector<KvhRecord>& records, const KvhOptions& options = {}) {

@@ -10,23 +10,18 @@
 #include <string>
 #include <vector>
 
+#include "ascii_decode_support.h"
+
 namespace nav::drivers {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 const HostTime kHost{1000, 2000};
 
-struct Result {
-  std::vector<NmeaRecord> records;
-  DecodeStats stats;
-};
+using Result = test::DecodeResult<NmeaRecord>;
 
 Result decode(const std::string& text, NmeaOptions options = {}) {
-  NmeaDecoder decoder(options);
-  Result result;
-  decoder.feed({reinterpret_cast<const uint8_t*>(text.data()), text.size()}, kHost, result.records);
-  result.stats = decoder.stats();
-  return result;
+  return test::decode_text<NmeaDecoder, NmeaRecord>(text, options, kHost);
 }
 
 std::string describe(const std::vector<NmeaRecord>& records) {

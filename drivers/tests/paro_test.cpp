@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "ascii_decode_support.h"
 #include "nav/drivers/codecs/paroscientific.h"
 
 namespace nav::drivers {
@@ -12,17 +13,10 @@ namespace {
 
 const HostTime kHost{7, 8};
 
-struct Result {
-  std::vector<ParoRecord> records;
-  DecodeStats stats;
-};
+using Result = test::DecodeResult<ParoRecord>;
 
 Result decode(const std::string& text, ParoOptions options = {}) {
-  ParoDecoder decoder(options);
-  Result r;
-  decoder.feed({reinterpret_cast<const uint8_t*>(text.data()), text.size()}, kHost, r.records);
-  r.stats = decoder.stats();
-  return r;
+  return test::decode_text<ParoDecoder, ParoRecord>(text, options, kHost);
 }
 
 std::string describe(const std::vector<ParoRecord>& records) {
