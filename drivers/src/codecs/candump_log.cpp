@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "civil_days.h"
+
 namespace nav::drivers {
 namespace {
 
@@ -64,15 +66,7 @@ bool parse_seconds(std::string_view s, int64_t& us) {
   return true;
 }
 
-/// Days since 1970-01-01 of a proleptic Gregorian date (H. Hinnant's days_from_civil).
-int64_t days_from_civil(int64_t y, int64_t m, int64_t d) {
-  y -= m <= 2 ? 1 : 0;
-  const int64_t era = (y >= 0 ? y : y - 399) / 400;
-  const int64_t yoe = y - era * 400;
-  const int64_t doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1;
-  const int64_t doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
-  return era * 146097 + doe - 719468;
-}
+using civil::days_from_civil;
 
 /// "YYYY-MM-DD" and "HH:MM:SS.ffffff" (candump -t A, local time; taken as UTC) -> µs.
 bool parse_date_time(std::string_view date, std::string_view time, int64_t& us) {

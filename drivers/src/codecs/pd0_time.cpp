@@ -1,19 +1,13 @@
 // Civil UTC time <-> UNIX microseconds for the PD0/PD6 real-time clock fields.
 // Day counting after H. Hinnant, "chrono-Compatible Low-Level Date Algorithms"
 // (days_from_civil / civil_from_days, proleptic Gregorian calendar).
+#include "civil_days.h"
 #include "pd0_wire.h"
 
 namespace nav::drivers::pd0_wire {
 namespace {
 
-int64_t days_from_civil(int64_t y, int m, int d) {
-  y -= m <= 2 ? 1 : 0;
-  const int64_t era = (y >= 0 ? y : y - 399) / 400;
-  const int64_t yoe = y - era * 400;
-  const int64_t doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1;
-  const int64_t doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
-  return era * 146097 + doe - 719468;
-}
+using civil::days_from_civil;
 
 bool is_leap(int y) { return (y % 4 == 0 && y % 100 != 0) || y % 400 == 0; }
 
