@@ -1,0 +1,48 @@
+#pragma once
+// The publisher thread: nav_solution_t and health_t (lcmtypes/) from the SolutionBoard on the
+// configured channels at the configured rates (config lcm.channels). Pose covariance is the
+// 6x6 [x y z roll pitch heading] block of the recovered robot covariance Σ_rr.
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "nav/daemon/config.h"
+#include "nav/daemon/measurement_queue.h"
+#include "navd/mailboxes.h"
+
+namespace lcm {
+class LCM;
+}
+
+namespace nav::navd {
+
+struct PublisherCounters {
+  std::uint64_t solutions = 0;
+  std::uint64_t health = 0;
+  std::uint64_t failures = 0;  ///< publish() returned an error
+};
+
+class Publisher {
+ public:
+  /// Opens LCM at config.url; good() is false (and nothing is published) if that fails.
+  Publisher(const daemon::LcmConfig& config, const SolutionBoard& board,
+            const daemon::MeasurementQueue& queue);
+  ~Publisher();
+  bool good() const;
+  /// Runs until `stop`, then publishes a last solution and health message.
+  PublisherCounters run(const std::atomic<bool>& stop);
+
+ private:
+  void publish_solution(const SolutionView& view);
+  void publish_health(const SolutionView& view);
+
+  daemon::LcmConfig config_;
+  const SolutionBoard& board_;
+  const daemon::MeasurementQueue& queue_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  PublisherCounters counters_;
+};
+
+}  // namespace nav::navd
