@@ -1,9 +1,12 @@
 // End-to-end tests of the navd executable (NAVD_PATH) on the built-in simulated survey: the
 // one-line JSON summary of a small survey run as fast as possible, a clean SIGTERM shutdown
-// within 1 s with exit status 0, and (where UDP multicast works) nav_solution_t / health_t
-// received over LCM udpm with ttl=0.
+// within 1 s with exit status 0, a 100-image survey whose recovery lags the filter, the
+// systemd notifications (READY, WATCHDOG, STATUS, STOPPING) on a test-owned NOTIFY_SOCKET, and
+// (where UDP multicast works) nav_solution_t / health_t received over LCM udpm with ttl=0.
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/socket.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -36,12 +39,16 @@ std::string slurp(const std::filesystem::path& path) {
 /// A navd child process with stdout/stderr redirected to files in a private directory.
 class NavdProcess {
  public:
-  explicit NavdProcess(const std::vector<std::string>& args) {
+  using Env = std::vector<std::pair<std::string, std::string>>;
+  explicit NavdProcess(const std::vector<std::string>& args, const Env& env = {}) {
     dir_ = std::filesystem::temp_directory_path() /
            ("navd_sim_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++));
     std::filesystem::create_directories(dir_);
     pid_ = ::fork();
-    if (pid_ == 0) exec_child(args);
+    if (pid_ == 0) {
+      for (const auto& [name, value] : env) ::setenv(name.c_str(), value.c_str(), 1);
+      exec_child(args);
+    }
   }
   ~NavdProcess() {
     if (pid_ > 0 && !reaped_) {
@@ -110,6 +117,84 @@ TEST(NavdSim, SmallSurveySummaryAndExitStatus) {
   EXPECT_LT(error_m, 1.0) << "20-image survey (40 s at 0.5 m/s) drifted too far";
   EXPECT_GT(j["wall_s"].get<double>(), 0.0);
   EXPECT_GT(j["realtime_factor"].get<double>(), 1.0);  // as fast as possible beats real time
+}
+
+TEST(NavdSim, LongerSurveyAsFastAsPossibleStaysAccurate) {
+  // As fast as possible the filter runs far ahead of the recovery thread (few solves for 400
+  // steps); the robot's O(1) relinearisation must keep the estimate on track.
+  NavdProcess navd(
+      {"--config", "config/sim.yaml", "--images", "100", "--seed", "2", "--as-fast-as-possible"});
+  ASSERT_EQ(navd.wait_exit(std::chrono::seconds(60)), 0) << navd.err();
+  const json j = json::parse(navd.out());
+  EXPECT_TRUE(j["completed"].get<bool>()) << j.dump();
+  EXPECT_EQ(j["images"].get<int>(), 100);
+  EXPECT_EQ(j["camera_links"].get<int>(), j["survey_links"].get<int>());
+  EXPECT_GT(j["survey_links"].get<int>(), 99);  // loop closures beyond the temporal chain
+  EXPECT_EQ(j["update_failures"].get<int>(), 0);
+  EXPECT_LT(j["final_position_error_m"].get<double>(), 1.0) << j.dump();
+  EXPECT_LT(j["final_position_error_running_m"].get<double>(), 1.0) << j.dump();
+  EXPECT_LT(j["cg_mean_relative_residual"].get<double>(), 1e-2) << j.dump();
+}
+
+/// A datagram socket bound to a fresh path, as systemd's NOTIFY_SOCKET.
+class NotifySocket {
+ public:
+  NotifySocket() {
+    path_ = (std::filesystem::temp_directory_path() /
+             ("navd_sim_test_notify_" + std::to_string(::getpid())))
+                .string();
+    std::filesystem::remove(path_);
+    fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::snprintf(addr.sun_path, sizeof addr.sun_path, "%s", path_.c_str());
+    bound_ = fd_ >= 0 && ::bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0;
+    timeval tv{0, 20'000};
+    ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  }
+  ~NotifySocket() {
+    if (fd_ >= 0) ::close(fd_);
+    std::filesystem::remove(path_);
+  }
+  bool bound() const { return bound_; }
+  const std::string& path() const { return path_; }
+  /// One datagram, or "" after the 20 ms receive timeout.
+  std::string receive() {
+    char buffer[4096];
+    const ssize_t n = ::recv(fd_, buffer, sizeof buffer, 0);
+    return n > 0 ? std::string(buffer, static_cast<size_t>(n)) : std::string();
+  }
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+  bool bound_ = false;
+};
+
+TEST(NavdSim, NotifiesSystemdReadyWatchdogStatusStopping) {
+  NotifySocket socket;
+  ASSERT_TRUE(socket.bound()) << "cannot bind " << socket.path();
+  NavdProcess navd({"--config", "config/sim.yaml", "--images", "20", "--speed", "40"},
+                   {{"NOTIFY_SOCKET", socket.path()}, {"WATCHDOG_USEC", "200000"}});
+  std::vector<std::string> messages;
+  int code = -1;
+  const auto deadline = Clock::now() + std::chrono::seconds(20);
+  while (Clock::now() < deadline && code == -1) {
+    for (std::string m = socket.receive(); !m.empty(); m = socket.receive()) messages.push_back(m);
+    code = navd.wait_exit(std::chrono::milliseconds(1));
+  }
+  for (std::string m = socket.receive(); !m.empty(); m = socket.receive()) messages.push_back(m);
+  ASSERT_EQ(code, 0) << navd.err();
+  auto count = [&](const std::string& prefix) {
+    int n = 0;
+    for (const std::string& m : messages) n += m.rfind(prefix, 0) == 0 ? 1 : 0;
+    return n;
+  };
+  ASSERT_FALSE(messages.empty());
+  EXPECT_EQ(messages.front().rfind("READY=1\nSTATUS=step 0/", 0), 0u) << messages.front();
+  EXPECT_GE(count("WATCHDOG=1"), 5);  // ~1 s run, watchdog period 100 ms
+  EXPECT_GE(count("STATUS=step "), 1);
+  EXPECT_EQ(messages.back(), "STOPPING=1");
 }
 
 TEST(NavdSim, SigtermStopsWithinOneSecondAndExitsZero) {

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <Eigen/Cholesky>
 #include <chrono>
 #include <cstdio>
 #include <thread>
@@ -179,6 +180,7 @@ void FilterLoop::apply_links(const core::sim::SurveyStep& step) {
 
 void FilterLoop::finish_step() {
   apply_links(survey_.steps[next_step_ - 1]);
+  relinearise_robot();
   step_open_ = false;
   ++counters_.steps;
   FilterSnapshot snapshot;
@@ -191,6 +193,23 @@ void FilterLoop::finish_step() {
   publish_view();
 }
 
+void FilterLoop::relinearise_robot() {
+  const core::InformationMatrix& info = filter_.information();
+  const int r = core::Esdf::kRobotBlock;
+  core::Vec12 b = filter_.information_vector().head<12>();
+  for (int k = 0; k < info.num_neighbours(r); ++k) {
+    b.noalias() -= info.neighbour_block(r, k) * filter_.mean_block(info.neighbour(r, k));
+  }
+  const Eigen::LLT<core::Mat12> llt(core::Mat12(info.diagonal_block(r)));
+  if (llt.info() != Eigen::Success) return;
+  core::Vec12 robot = llt.solve(b);
+  for (int i = 3; i < 6; ++i) robot(i) = core::wrap_angle(robot(i));
+  if (!robot.allFinite()) return;
+  Eigen::VectorXd mean = filter_.mean();
+  mean.head<12>() = robot;
+  if (core::Status s = filter_.set_mean(mean); !s.ok()) fail("relinearise robot", s);
+}
+
 void FilterLoop::apply_recovery() {
   RecoveredState rec;
   if (!outbox_.take_new(rec)) return;
@@ -200,10 +219,6 @@ void FilterLoop::apply_recovery() {
   Eigen::VectorXd mean = filter_.mean();
   const Eigen::Index n = rec.mean.size();
   mean.segment(12, n - 12) = rec.mean.segment(12, n - 12);
-  core::Vec12 correction = rec.mean.head<12>() - rec.filter_robot_mean;
-  for (int i = 3; i < 6; ++i) correction(i) = core::wrap_angle(correction(i));
-  mean.head<12>() += correction;
-  for (int i = 3; i < 6; ++i) mean(i) = core::wrap_angle(mean(i));
   if (filter_.set_mean(mean).ok()) ++counters_.recoveries_applied;
 }
 

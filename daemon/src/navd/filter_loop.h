@@ -10,9 +10,12 @@
 // * when a step is complete (before the next prediction, and at the end) its camera links are
 //   applied between the images' delayed states (the survey stands in for the vision pipeline);
 //   then a snapshot of (Λ, η) and the step's prediction records go to the recovery thread;
-// * the newest recovered mean is taken back (never waited for) as the linearisation point:
-//   delayed blocks take it directly; the robot, which has moved on since that snapshot, is
-//   shifted by the correction (recovered − linearisation point at the snapshot).
+// * at the end of each step the robot's linearisation point is relinearised in O(1): one block
+//   Gauss-Seidel solve  μ_r = Λ_rr⁻¹ (η_r − Σ_j Λ_rj μ_j)  over its few neighbours (the robot's
+//   conditional mean given the delayed states), so the robot tracks its measurements even when
+//   recovery lags;
+// * the newest recovered mean (never waited for) becomes the linearisation point of the delayed
+//   states that were in its snapshot.
 // systemd: READY=1 once initialised, WATCHDOG=1 at the watchdog period, STATUS= once a second.
 
 #include <atomic>
@@ -68,6 +71,7 @@ class FilterLoop {
   void predict_step();
   void finish_step();
   void apply_recovery();
+  void relinearise_robot();
   void update_robot(const daemon::Measurement& m);
   void apply_links(const core::sim::SurveyStep& step);
   void publish_view();

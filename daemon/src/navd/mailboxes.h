@@ -33,8 +33,7 @@ struct PredictionRecord {
   int kept_block = -1;
 };
 
-/// Λ, η after a filter step, with the filter's robot mean at that step (to carry a late
-/// recovery forward, see FilterLoop::apply_recovery).
+/// Λ, η after a filter step, with the filter's robot linearisation point at that step.
 struct FilterSnapshot {
   std::uint64_t step = 0;  ///< filter steps completed
   core::InformationMatrix lambda{12};

@@ -61,6 +61,7 @@ void RecoveryWorker::solve(const FilterSnapshot& snapshot) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   ++counters_.solves;
   counters_.last_relative_residual = result.max_relative_residual;
+  counters_.last_mean_relative_residual = result.mean_relative_residual;
   RecoveredState state;
   state.step = snapshot.step;
   state.ok = result.status.ok();

@@ -17,7 +17,8 @@ namespace nav::navd {
 struct RecoveryCounters {
   std::uint64_t solves = 0;
   std::uint64_t failures = 0;
-  double last_relative_residual = 0.0;
+  double last_relative_residual = 0.0;       ///< max of mean and Σ_{*r} columns
+  double last_mean_relative_residual = 0.0;  ///< ‖η − Λμ‖ / ‖η‖
   double total_solve_s = 0.0;
 };
 
