@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
@@ -134,6 +135,42 @@ TEST(NavdSim, LongerSurveyAsFastAsPossibleStaysAccurate) {
   EXPECT_LT(j["final_position_error_m"].get<double>(), 1.0) << j.dump();
   EXPECT_LT(j["final_position_error_running_m"].get<double>(), 1.0) << j.dump();
   EXPECT_LT(j["cg_mean_relative_residual"].get<double>(), 1e-2) << j.dump();
+}
+
+/// config/sim.yaml with another filter.cg_iterations_per_step, written to `path`.
+void write_sim_config(const std::filesystem::path& path, int cg_iterations) {
+  std::string yaml = slurp("config/sim.yaml");
+  const std::string key = "cg_iterations_per_step: 5";
+  const size_t at = yaml.find(key);
+  ASSERT_NE(at, std::string::npos) << "config/sim.yaml changed: no '" << key << "'";
+  yaml.replace(at, key.size(), "cg_iterations_per_step: " + std::to_string(cg_iterations));
+  std::ofstream(path) << yaml;
+}
+
+TEST(NavdSim, MatchesNavtoolDemoReferenceWhenRecoveryConverges) {
+  // navtool demo runs the same survey (seed 1) synchronously with direct solves and exact
+  // marginals. With enough PCG iterations per step navd's final estimate and its published
+  // position covariance must agree with it.
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("navd_sim_test_ref_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  write_sim_config(dir / "sim.yaml", 200);
+  const std::string reference_path = (dir / "demo.json").string();
+  const std::string command = std::string("'") + NAVTOOL_PATH +
+                              "' demo --images 20 --seed 1 --json >'" + reference_path + "'";
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  const json reference = json::parse(slurp(reference_path));
+  NavdProcess navd({"--config", (dir / "sim.yaml").string(), "--images", "20", "--speed", "50"});
+  const int code = navd.wait_exit(std::chrono::seconds(60));
+  std::filesystem::remove_all(dir);
+  ASSERT_EQ(code, 0) << navd.err();
+  const json j = json::parse(navd.out());
+  const double sigma_ref = reference["final_position_sigma_m"].get<double>();
+  EXPECT_NEAR(j["published_position_sigma_m"].get<double>(), sigma_ref, 0.05 * sigma_ref)
+      << j.dump();
+  EXPECT_NEAR(j["final_position_error_m"].get<double>(),
+              reference["final_position_error_m"].get<double>(), 0.01)
+      << j.dump();
 }
 
 /// A datagram socket bound to a fresh path, as systemd's NOTIFY_SOCKET.

@@ -11,6 +11,7 @@
 
 #include <CLI/CLI.hpp>
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <ctime>
@@ -129,8 +130,11 @@ int run(const Args& args) {
     t->join();
   }
   const double wall_s = (navd::monotonic_us() - start_us) * 1e-6;
+  const navd::SolutionView view = board.read();
+  const double sigma_m = std::sqrt(view.robot_covariance.topLeftCorner<3, 3>().trace());
   navd::Summary summary{
-      survey, filter_result, recovery_counters, publisher_counters, queue.total_dropped(), wall_s};
+      survey, filter_result, recovery_counters, publisher_counters, queue.total_dropped(),
+      wall_s, sigma_m};
   std::printf("%s\n", navd::summary_json(summary).c_str());
   std::fflush(stdout);
   return filter_result.error.empty() ? 0 : 1;

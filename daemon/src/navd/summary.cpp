@@ -45,7 +45,8 @@ std::string summary_json(const Summary& s) {
                    s.recovery.solves, c.recoveries_applied, s.recovery.failures);
   j += fmt::format("\"cg_relative_residual\":{:.6g},\"cg_mean_relative_residual\":{:.6g},",
                    s.recovery.last_relative_residual, s.recovery.last_mean_relative_residual);
-  j += fmt::format("\"mean_recovery_ms\":{:.6g},", mean_recovery_ms);
+  j += fmt::format("\"mean_recovery_ms\":{:.6g},\"published_position_sigma_m\":{:.6g},",
+                   mean_recovery_ms, s.published_position_sigma_m);
   j += fmt::format("\"solutions_published\":{},\"health_published\":{},\"publish_failures\":{},",
                    s.publisher.solutions, s.publisher.health, s.publisher.failures);
   j += fmt::format("\"error\":{}", quoted(s.filter.error));

@@ -7,6 +7,7 @@
 //   unmatched_measurements, recoveries, recoveries_applied, recovery_failures,
 //   cg_relative_residual (last solve, worst of mean and Σ_{*r} columns), cg_mean_relative_residual
 //   (last solve, mean column), mean_recovery_ms (PCG solve wall time per step),
+//   published_position_sigma_m (sqrt of the trace of the last published position covariance),
 //   solutions_published, health_published, publish_failures, error.
 
 #include <cstdint>
@@ -26,6 +27,8 @@ struct Summary {
   const PublisherCounters& publisher;
   std::uint64_t queue_drops = 0;
   double wall_s = 0.0;
+  /// sqrt(trace Σ_xyz) of the last published robot covariance (recovered, fixed iterations).
+  double published_position_sigma_m = 0.0;
 };
 
 std::string summary_json(const Summary& s);
