@@ -173,6 +173,26 @@ TEST(NavdSim, MatchesNavtoolDemoReferenceWhenRecoveryConverges) {
       << j.dump();
 }
 
+TEST(NavdSim, IdleRefinementConvergesCovarianceWithDefaultIterations) {
+  // config/sim.yaml: 5 PCG iterations per step, which alone leave the covariance column far
+  // from converged; paced at 10x real time the recovery thread refines between steps.
+  const auto reference_path = std::filesystem::temp_directory_path() /
+                              ("navd_sim_test_demo_" + std::to_string(::getpid()) + ".json");
+  ASSERT_EQ(std::system((std::string("'") + NAVTOOL_PATH + "' demo --images 20 --seed 1 --json >'" +
+                         reference_path.string() + "'")
+                            .c_str()),
+            0);
+  const json reference = json::parse(slurp(reference_path));
+  std::filesystem::remove(reference_path);
+  NavdProcess navd({"--config", "config/sim.yaml", "--images", "20", "--speed", "10"});
+  ASSERT_EQ(navd.wait_exit(std::chrono::seconds(60)), 0) << navd.err();
+  const json j = json::parse(navd.out());
+  EXPECT_GT(j["recovery_idle_refinements"].get<int>(), 0);
+  const double sigma_ref = reference["final_position_sigma_m"].get<double>();
+  EXPECT_NEAR(j["published_position_sigma_m"].get<double>(), sigma_ref, 0.1 * sigma_ref)
+      << j.dump();
+}
+
 /// A datagram socket bound to a fresh path, as systemd's NOTIFY_SOCKET.
 class NotifySocket {
  public:

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <vector>
 
@@ -14,6 +15,17 @@ core::StateRecoveryOptions fixed_iterations(int iterations) {
   options.iterations_per_step = iterations;
   return options;
 }
+
+/// While no new snapshot is waiting, the newest one is solved again (each solve the configured
+/// fixed number of PCG iterations, from the warm start) up to this many times or until the
+/// worst column's relative residual is below kConvergedResidual: the filter never waits for
+/// it, and the covariance column converges when the thread has spare time.
+constexpr int kMaxIdleRefinements = 40;
+constexpr double kConvergedResidual = 1e-8;
+/// PCG iterations of an idle re-solve. Fewer do not converge the covariance columns: a short
+/// solve from zero can leave a residual above ‖e_c‖, and PCG then restarts that column from
+/// zero on the next solve (pcg.h), so repeated 5-iteration solves make no progress.
+constexpr int kIdleIterations = 50;
 
 }  // namespace
 
@@ -33,8 +45,21 @@ RecoveryWorker::RecoveryWorker(const core::Vec12& x0, const core::Mat12& P0,
 RecoveryCounters RecoveryWorker::run(const std::atomic<bool>& stop) {
   std::vector<PredictionRecord> records;
   FilterSnapshot snapshot;
+  int refinements = 0;  // extra solves of the current snapshot while idle
+  bool have_snapshot = false;
   while (!stop.load()) {
-    if (!inbox_.take(records, snapshot, 50)) continue;
+    const bool idle_refine = have_snapshot && refinements < kMaxIdleRefinements &&
+                             counters_.last_relative_residual > kConvergedResidual;
+    if (!inbox_.take(records, snapshot, idle_refine ? 0 : 50)) {
+      if (idle_refine && !broken_) {
+        ++refinements;
+        ++counters_.idle_refinements;
+        refine(snapshot);
+      }
+      continue;
+    }
+    have_snapshot = true;
+    refinements = 0;
     if (broken_ || !extend(records)) continue;
     solve(snapshot);
   }
@@ -52,6 +77,15 @@ bool RecoveryWorker::extend(const std::vector<PredictionRecord>& records) {
     }
   }
   return true;
+}
+
+void RecoveryWorker::refine(const FilterSnapshot& snapshot) {
+  const core::StateRecoveryOptions configured = recovery_.options();
+  core::StateRecoveryOptions longer = configured;
+  longer.iterations_per_step = std::max(configured.iterations_per_step, kIdleIterations);
+  (void)recovery_.set_options(longer);
+  solve(snapshot);
+  (void)recovery_.set_options(configured);
 }
 
 void RecoveryWorker::solve(const FilterSnapshot& snapshot) {

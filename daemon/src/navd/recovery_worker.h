@@ -3,7 +3,9 @@
 // It takes the newest filter snapshot with every prediction since the last one, extends its
 // warm start across those predictions (exact rules of state_recovery.h), runs the fixed number
 // of PCG iterations on the snapshot and hands μ and Σ_rr back through the RecoveryOutbox and
-// the SolutionBoard. It never blocks the filter (mailboxes.h).
+// the SolutionBoard. It never blocks the filter (mailboxes.h). With spare time (no newer
+// snapshot waiting) it solves the newest snapshot again, up to a bounded number of times, so
+// the covariance column converges between filter steps.
 
 #include <atomic>
 #include <cstdint>
@@ -20,6 +22,7 @@ struct RecoveryCounters {
   double last_relative_residual = 0.0;       ///< max of mean and Σ_{*r} columns
   double last_mean_relative_residual = 0.0;  ///< ‖η − Λμ‖ / ‖η‖
   double total_solve_s = 0.0;
+  std::uint64_t idle_refinements = 0;  ///< extra solves of a snapshot while idle
 };
 
 class RecoveryWorker {
@@ -34,6 +37,7 @@ class RecoveryWorker {
  private:
   bool extend(const std::vector<PredictionRecord>& records);
   void solve(const FilterSnapshot& snapshot);
+  void refine(const FilterSnapshot& snapshot);  ///< solve with more iterations while idle
 
   core::StateRecovery recovery_;
   RecoveryInbox& inbox_;

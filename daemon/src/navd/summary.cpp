@@ -41,6 +41,7 @@ std::string summary_json(const Summary& s) {
   j += fmt::format("\"queue_drops\":{},\"late_drops\":{},\"full_drops\":{},", s.queue_drops,
                    s.filter.ordering.dropped_late, s.filter.ordering.dropped_full);
   j += fmt::format("\"unmatched_measurements\":{},", c.unmatched_measurements);
+  j += fmt::format("\"recovery_idle_refinements\":{},", s.recovery.idle_refinements);
   j += fmt::format("\"recoveries\":{},\"recoveries_applied\":{},\"recovery_failures\":{},",
                    s.recovery.solves, c.recoveries_applied, s.recovery.failures);
   j += fmt::format("\"cg_relative_residual\":{:.6g},\"cg_mean_relative_residual\":{:.6g},",

@@ -4,11 +4,11 @@
 //   update_failures, final_position_error_m (after a direct mean solve at the end),
 //   final_position_error_running_m (the running linearisation point), survey_time_s, wall_s,
 //   realtime_factor (survey_time_s / wall_s), queue_drops, late_drops, full_drops,
-//   unmatched_measurements, recoveries, recoveries_applied, recovery_failures,
-//   cg_relative_residual (last solve, worst of mean and Σ_{*r} columns), cg_mean_relative_residual
-//   (last solve, mean column), mean_recovery_ms (PCG solve wall time per step),
-//   published_position_sigma_m (sqrt of the trace of the last published position covariance),
-//   solutions_published, health_published, publish_failures, error.
+//   unmatched_measurements, recovery_idle_refinements, recoveries, recoveries_applied,
+//   recovery_failures, cg_relative_residual (last solve, worst of mean and Σ_{*r} columns),
+//   cg_mean_relative_residual (last solve, mean column), mean_recovery_ms (PCG solve wall time per
+//   step), published_position_sigma_m (sqrt of the trace of the last published position
+//   covariance), solutions_published, health_published, publish_failures, error.
 
 #include <cstdint>
 #include <string>
