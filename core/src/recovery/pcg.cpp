@@ -160,7 +160,8 @@ PcgSummary solve_pcg(const SpdOperator& A, const BlockJacobiPreconditioner& M,
   const Eigen::VectorXd rhs_norm = B.colwise().norm().transpose();
   if (options.restart_worse_than_zero) {
     for (Eigen::Index c = 0; c < m; ++c) {
-      if (R.col(c).norm() > rhs_norm[c]) {
+      // Q = A X here: energy of the warm start relative to zero (see PcgOptions).
+      if (X.col(c).dot(Q.col(c)) - 2.0 * B.col(c).dot(X.col(c)) > 0.0) {
         X.col(c).setZero();
         R.col(c) = B.col(c);
         ++summary.restarted_columns;

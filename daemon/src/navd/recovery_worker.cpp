@@ -22,9 +22,8 @@ core::StateRecoveryOptions fixed_iterations(int iterations) {
 /// it, and the covariance column converges when the thread has spare time.
 constexpr int kMaxIdleRefinements = 40;
 constexpr double kConvergedResidual = 1e-8;
-/// PCG iterations of an idle re-solve. Fewer do not converge the covariance columns: a short
-/// solve from zero can leave a residual above ‖e_c‖, and PCG then restarts that column from
-/// zero on the next solve (pcg.h), so repeated 5-iteration solves make no progress.
+/// PCG iterations of an idle re-solve: a longer solve of the newest snapshot while the thread
+/// has spare time, so the covariance column converges between filter steps.
 constexpr int kIdleIterations = 50;
 
 }  // namespace

@@ -105,10 +105,13 @@ struct PcgOptions {
   /// Recompute R = B - A X with one extra product at the end (recommended; the bounds rely on
   /// it). When false the recurrence residual is reported.
   bool recompute_true_residual = true;
-  /// A column whose warm start has a larger residual than x = 0 (‖b - A x0‖ > ‖b‖) restarts
-  /// from zero. A stale warm start propagated through many predictions can be arbitrarily bad
-  /// (errors are multiplied by F every step); this keeps every column's residual from growing
-  /// without bound under a fixed budget.
+  /// A column whose warm start is further from the solution than x = 0 in the A-norm that CG
+  /// minimises restarts from zero: ‖x0 - x*‖²_A - ‖x*‖²_A = x0ᵀA x0 - 2 bᵀx0 > 0. A stale warm
+  /// start propagated through many predictions can be arbitrarily bad (errors are multiplied
+  /// by F every step); this keeps every column's error from growing without bound under a
+  /// fixed budget. (Comparing residual 2-norms instead, ‖b - A x0‖ > ‖b‖, wrongly throws away
+  /// good covariance columns: Λ is badly scaled, so a small error in x0 can give a residual
+  /// far above ‖e_r‖ = 1 although x0 is much closer to Σ_{*r} than zero is.)
   bool restart_worse_than_zero = true;
 
   Status validate() const;
