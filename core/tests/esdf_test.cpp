@@ -50,7 +50,7 @@ class DenseEkf {
     const MatrixXd Ptt = P_.topLeftCorner(d_, d_);
     m_.head(d_) = f + F * (m_.head(d_) - mu_t);
     P_.topRows(d_) = F * P_t_all;
-    P_.leftCols(d_) = P_.topRows(d_).transpose();
+    P_.leftCols(d_) = P_.topRows(d_).transpose().eval();  // overlaps at the corner
     P_.topLeftCorner(d_, d_) = F * Ptt * F.transpose() + Q;
     (void)N;
   }
