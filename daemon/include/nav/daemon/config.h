@@ -104,6 +104,12 @@ struct CameraConfig {
   double frame_rate_hz = 1.0;  ///< images per second [1e-3, 100]
 };
 
+/// Pressure-to-depth conversion (UNESCO 1983, drivers/codecs/seawater.h), pressure_paro only.
+struct PressureConfig {
+  double latitude_deg = 41.73;           ///< latitude_deg, [-90, 90] (default: RMS Titanic site)
+  double surface_pressure_dbar = 10.1325;  ///< surface_pressure_dbar, atmosphere at the surface
+};
+
 struct SensorConfig {
   std::string name;  ///< required, unique
   SensorType type = SensorType::kDvlPd0;
@@ -111,6 +117,10 @@ struct SensorConfig {
   Mount mount;
   NoiseSigmas noise;
   CameraConfig camera;  ///< required block for camera_* types, forbidden otherwise
+  PressureConfig pressure;  ///< pressure_paro only
+  /// latency_ms: time from validity to the host reading the last byte, subtracted from the
+  /// host receive time for sensors whose messages carry no usable device time. [0, 10000]
+  double latency_s = 0.0;
 };
 
 struct FilterConfig {

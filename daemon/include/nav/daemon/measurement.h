@@ -13,7 +13,7 @@ namespace nav::daemon {
 
 /// When a measurement is valid and when it arrived. All in microseconds.
 struct MeasurementTime {
-  std::int64_t validity_us = 0;        ///< sensor time of validity, mapped onto the host clock
+  std::int64_t validity_us = 0;        ///< sensor time of validity on the host CLOCK_MONOTONIC
   std::int64_t host_monotonic_us = 0;  ///< CLOCK_MONOTONIC at receipt
   std::int64_t host_realtime_us = 0;   ///< CLOCK_REALTIME at receipt
   std::uint16_t sensor_index = 0;      ///< index into NavdConfig::sensors
@@ -26,6 +26,8 @@ struct DvlVelocity {  ///< bottom-track velocity of the vehicle over ground in t
 struct Attitude {  ///< roll, pitch, heading (Z-Y-X Euler) of the sensor frame in world
   MeasurementTime time;
   double roll_rad = 0.0, pitch_rad = 0.0, heading_rad = 0.0;
+  bool has_roll_pitch = true;  ///< false: a heading-only sentence (e.g. NMEA HDT)
+  bool has_heading = true;     ///< false: a roll/pitch-only sentence (e.g. iXblue PHTRO)
 };
 struct AngularRate {  ///< gyro rate in the sensor frame
   MeasurementTime time;

@@ -1,0 +1,43 @@
+#pragma once
+// Image registration results keyed by (earlier frame id, later frame id): the vision stage's
+// answers, or, until it exists, the survey simulator's oracle answers read from a dive log
+// (NAV_REGISTRATION, hil-tests/README.md). The filter proposes a pair from its bounds and asks
+// the table; a pair with no entry was never registered (no overlap) and counts as a failed
+// registration.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <utility>
+
+#include <navlcm/registration_t.hpp>
+
+namespace nav::daemon {
+
+struct RegistrationResult {
+  bool success = false;
+  Eigen::Matrix<double, 5, 1> z = Eigen::Matrix<double, 5, 1>::Zero();  ///< camera model order
+  Eigen::Matrix<double, 5, 5> covariance = Eigen::Matrix<double, 5, 5>::Identity();
+  double overlap_fraction = -1.0;
+  bool is_outlier = false;       ///< simulator truth only
+  std::int64_t available_us = 0;  ///< utime of the result
+};
+
+class RegistrationTable {
+ public:
+  /// Adds or replaces the result for (frame_id_i, frame_id_j). Requires frame_id_i <
+  /// frame_id_j (the measurement is always camera i -> camera j, earlier to later); throws
+  /// std::invalid_argument naming both ids otherwise.
+  void insert(const navlcm::registration_t& registration);
+  /// The result for the pair given in either order (its measurement is always from the smaller
+  /// frame id to the larger), or nullopt if it was never registered.
+  std::optional<RegistrationResult> find(std::int64_t frame_a, std::int64_t frame_b) const;
+  std::size_t size() const { return results_.size(); }
+  std::size_t outliers() const;
+
+ private:
+  std::map<std::pair<std::int64_t, std::int64_t>, RegistrationResult> results_;
+};
+
+}  // namespace nav::daemon

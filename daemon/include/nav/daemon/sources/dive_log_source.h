@@ -1,0 +1,47 @@
+#pragma once
+// The dive-log source: plays a recorded dive (dive_log.h) into the MeasurementQueue exactly as
+// the driver threads would on the vehicle: each RAW_<NAME> message goes through the sensor's
+// decoder (sensor_decoder.h, the same codecs) and NAV_IMAGE becomes an ImageEvent.
+// Registrations (NAV_REGISTRATION) are not measurements: load_registrations() reads them all
+// before the replay starts (the vision stage's stand-in, registration_table.h).
+//
+// Pacing: `speed` x real time on the log's host monotonic clock, or as fast as possible; in the
+// latter mode the source waits while the queue is more than half full (a replay may throttle; a
+// live driver would drop).
+
+#include <atomic>
+#include <cstdint>
+#include <string>
+
+#include "nav/daemon/config.h"
+#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/registration_table.h"
+
+namespace nav::daemon {
+
+struct DiveLogSourceOptions {
+  double speed = 1.0;  ///< x real time (> 0); ignored when as_fast_as_possible
+  bool as_fast_as_possible = false;
+};
+
+struct DiveLogSourceCounters {
+  std::uint64_t events = 0;          ///< log events read
+  std::uint64_t raw_messages = 0;    ///< RAW_* messages fed to decoders
+  std::uint64_t unknown_devices = 0;  ///< RAW_* from a sensor name not in the config
+  std::uint64_t measurements = 0;    ///< pushed to the queue (images included)
+  std::uint64_t images = 0;
+  std::uint64_t decode_errors = 0;   ///< summed over the decoders
+  std::int64_t first_monotonic_us = 0, last_monotonic_us = 0;  ///< log's host time span
+};
+
+/// Reads every NAV_REGISTRATION of the log. Throws DiveLogError.
+RegistrationTable load_registrations(const std::string& log_path);
+
+/// Runs on its own thread; returns at the end of the log or when `stop` is set, setting `done`
+/// after the last push. Throws DiveLogError on a corrupt log.
+DiveLogSourceCounters run_dive_log_source(const std::string& log_path, const NavdConfig& config,
+                                          const DiveLogSourceOptions& options,
+                                          MeasurementQueue& queue, const std::atomic<bool>& stop,
+                                          std::atomic<bool>& done);
+
+}  // namespace nav::daemon

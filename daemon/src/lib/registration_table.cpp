@@ -1,0 +1,36 @@
+#include "nav/daemon/registration_table.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace nav::daemon {
+
+void RegistrationTable::insert(const navlcm::registration_t& r) {
+  RegistrationResult result;
+  result.success = r.success;
+  for (int k = 0; k < 5; ++k) result.z(k) = r.measurement[k];
+  for (int k = 0; k < 25; ++k) result.covariance(k / 5, k % 5) = r.covariance[k];
+  result.overlap_fraction = r.overlap_fraction;
+  result.is_outlier = r.is_outlier;
+  result.available_us = r.utime;
+  if (r.frame_id_i >= r.frame_id_j) {
+    throw std::invalid_argument("registration_t: frame_id_i (" + std::to_string(r.frame_id_i) +
+                                ") must be smaller than frame_id_j (" +
+                                std::to_string(r.frame_id_j) + ")");
+  }
+  results_[{r.frame_id_i, r.frame_id_j}] = result;
+}
+
+std::optional<RegistrationResult> RegistrationTable::find(std::int64_t a, std::int64_t b) const {
+  const auto it = results_.find({std::min(a, b), std::max(a, b)});
+  if (it == results_.end()) return std::nullopt;
+  return it->second;
+}
+
+std::size_t RegistrationTable::outliers() const {
+  return static_cast<std::size_t>(std::count_if(
+      results_.begin(), results_.end(), [](const auto& kv) { return kv.second.is_outlier; }));
+}
+
+}  // namespace nav::daemon
