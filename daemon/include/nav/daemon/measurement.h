@@ -32,6 +32,9 @@ struct Attitude {  ///< roll, pitch, heading (Z-Y-X Euler) of the sensor frame i
 struct AngularRate {  ///< gyro rate in the sensor frame
   MeasurementTime time;
   std::array<double, 3> omega_sensor_radps{};
+  /// Which components were measured (a single-axis FOG such as the KVH DSP-3000 measures z only;
+  /// the others are then 0 and must not be used).
+  std::array<bool, 3> has_axis{true, true, true};
 };
 struct Depth {  ///< depth of the sensor below the surface (world z, down)
   MeasurementTime time;
