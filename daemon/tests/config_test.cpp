@@ -74,6 +74,12 @@ TEST(Config, SimYamlLoads) {
   EXPECT_EQ(c.lcm.url, "memq://");
   EXPECT_DOUBLE_EQ(c.filter.process_noise.accel_psd[1], 1e-3);
   EXPECT_TRUE(c.filter.process_noise.validate().ok());
+  // Latencies the survey simulator applies (config/README.md).
+  EXPECT_DOUBLE_EQ(c.sensors[0].latency_s, 0.1);
+  EXPECT_DOUBLE_EQ(c.sensors[1].latency_s, 0.02);
+  EXPECT_DOUBLE_EQ(c.sensors[2].latency_s, 0.05);
+  EXPECT_DOUBLE_EQ(c.sensors[3].latency_s, 0.05);
+  EXPECT_DOUBLE_EQ(c.sensors[2].pressure.latitude_deg, 41.73);
 }
 
 TEST(Config, RovYamlLoads) {
@@ -94,6 +100,8 @@ TEST(Config, RovYamlLoads) {
   EXPECT_EQ(c.sensors[6].camera.trigger, Trigger::kHardware);
   EXPECT_EQ(c.checkpoint.keep, 5);
   EXPECT_DOUBLE_EQ(c.filter.latency_window_ms, 250.0);
+  EXPECT_EQ(c.sensors[3].type, SensorType::kPressureParo);
+  EXPECT_GT(c.sensors[3].latency_s, 0.0);
 }
 
 TEST(Config, WrongBaudNamesTheKeyPath) {
@@ -212,6 +220,43 @@ TEST(Config, SensorSemantics) {
   EXPECT_EQ(e.key_path(), "sensors");
   e = expect_error(std::string(kMinimal) + "lcm: {url: 'tcp://x'}\n");
   EXPECT_EQ(e.key_path(), "lcm.url");
+}
+
+TEST(Config, LatencyAndPressureKeys) {
+  NavdConfig c = parse_config(
+      "sensors:\n  - name: p\n    type: pressure_paro\n    transport: {type: sim}\n"
+      "    latency_ms: 50\n    pressure: {latitude_deg: -33.5, surface_pressure_dbar: 10.2}\n"
+      "  - {name: a, type: altimeter, transport: {type: sim}}\n");
+  EXPECT_DOUBLE_EQ(c.sensors[0].latency_s, 0.05);
+  EXPECT_DOUBLE_EQ(c.sensors[0].pressure.latitude_deg, -33.5);
+  EXPECT_DOUBLE_EQ(c.sensors[0].pressure.surface_pressure_dbar, 10.2);
+  EXPECT_DOUBLE_EQ(c.sensors[1].latency_s, 0.0);  // default: no latency
+  EXPECT_DOUBLE_EQ(c.sensors[1].pressure.surface_pressure_dbar, 10.1325);
+
+  ConfigError e = expect_error(
+      "sensors:\n  - {name: a, type: altimeter, transport: {type: sim}, latency_ms: 10001}\n");
+  EXPECT_EQ(e.key_path(), "sensors[0].latency_ms");
+  e = expect_error(
+      "sensors:\n  - {name: a, type: altimeter, transport: {type: sim}, latency_ms: -1}\n");
+  EXPECT_EQ(e.key_path(), "sensors[0].latency_ms");
+  e = expect_error(
+      "sensors:\n  - {name: a, type: dvl_pd0, transport: {type: sim},"
+      " pressure: {latitude_deg: 10}}\n");
+  EXPECT_EQ(e.key_path(), "sensors[0].pressure");
+  EXPECT_NE(e.reason().find("only pressure_paro"), std::string::npos) << e.what();
+  EXPECT_NE(e.reason().find("dvl_pd0"), std::string::npos) << e.what();
+  e = expect_error(
+      "sensors:\n  - {name: p, type: pressure_paro, transport: {type: sim},"
+      " pressure: {latitude_deg: 91}}\n");
+  EXPECT_EQ(e.key_path(), "sensors[0].pressure.latitude_deg");
+  e = expect_error(
+      "sensors:\n  - {name: p, type: pressure_paro, transport: {type: sim},"
+      " pressure: {surface_pressure_dbar: 21}}\n");
+  EXPECT_EQ(e.key_path(), "sensors[0].pressure.surface_pressure_dbar");
+  e = expect_error(
+      "sensors:\n  - {name: p, type: pressure_paro, transport: {type: sim},"
+      " pressure: {latitude: 10}}\n");
+  EXPECT_EQ(e.key_path(), "sensors[0].pressure.latitude");
 }
 
 TEST(Config, BadCanSignalTableStopsAtTheKey) {

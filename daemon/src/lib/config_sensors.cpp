@@ -206,8 +206,16 @@ CameraConfig parse_camera(const YamlReader& c) {
   return cam;
 }
 
+PressureConfig parse_pressure(const YamlReader& p) {
+  p.expect_map({"latitude_deg", "surface_pressure_dbar"});
+  PressureConfig pressure;
+  p.read("latitude_deg", pressure.latitude_deg, -90.0, 90.0);
+  p.read("surface_pressure_dbar", pressure.surface_pressure_dbar, 0.0, 20.0);
+  return pressure;
+}
+
 SensorConfig parse_sensor(const YamlReader& s, const std::string& base_dir) {
-  s.expect_map({"name", "type", "transport", "mount", "noise", "camera"});
+  s.expect_map({"name", "type", "transport", "mount", "noise", "camera", "pressure", "latency_ms"});
   SensorConfig sensor;
   s.read("name", sensor.name, true);
   sensor.type = parse_type(s);
@@ -220,6 +228,16 @@ SensorConfig parse_sensor(const YamlReader& s, const std::string& base_dir) {
     s.at("camera").fail(std::string("only camera sensors take a camera block, this is ") +
                         to_string(sensor.type));
   }
+  if (s.has("pressure")) {
+    if (sensor.type != SensorType::kPressureParo) {
+      s.at("pressure").fail(std::string("only pressure_paro sensors take a pressure block, this is ") +
+                            to_string(sensor.type));
+    }
+    sensor.pressure = parse_pressure(s.at("pressure"));
+  }
+  double latency_ms = sensor.latency_s * 1e3;
+  s.read("latency_ms", latency_ms, 0.0, 10000.0);
+  sensor.latency_s = latency_ms * 1e-3;
   return sensor;
 }
 
