@@ -122,8 +122,8 @@ TEST(SensorDecoder, Pd0BottomTrackIsNegatedInEverySplitAndInvalidOnesAreCounted)
   append(stream, drivers::encode_pd0(pd0_ensemble({-0.5, 0.2, -0.03, 0.0}, std::nullopt)));
   const SensorConfig sensor = sensor_of(SensorType::kDvlPd0, 0.1);
   expect_every_split<DvlVelocity>(sensor, stream, 2, [](std::size_t k, const DvlVelocity& m) {
-    const std::array<double, 3> want = k == 0 ? std::array<double, 3>{-0.25, 0.1, -0.02}
-                                              : std::array<double, 3>{0.5, -0.2, 0.03};
+    const std::array<double, 3> want =
+        k == 0 ? std::array<double, 3>{-0.25, 0.1, -0.02} : std::array<double, 3>{0.5, -0.2, 0.03};
     for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(m.v_sensor_mps[i], want[i], 1e-9);
   });
   auto d = make_sensor_decoder(sensor, 0);
@@ -153,8 +153,8 @@ TEST(SensorDecoder, Pd0RtcIsMappedOntoTheHostClockOnceTrusted) {
     const std::int64_t rtc = valid_mono + kRealtimeOffsetUs + 300'000;
     const std::int64_t host = valid_mono + 100'000 + static_cast<std::int64_t>(jitter(rng));
     std::vector<Measurement> out;
-    d->feed(drivers::encode_pd0(pd0_ensemble({0.1, 0.0, 0.0, 0.0}, rtc)),
-            host + kRealtimeOffsetUs, host, out);
+    d->feed(drivers::encode_pd0(pd0_ensemble({0.1, 0.0, 0.0, 0.0}, rtc)), host + kRealtimeOffsetUs,
+            host, out);
     ASSERT_EQ(out.size(), 1u);
     const std::int64_t validity = validity_us(out[0]);
     if (k < 4) {
@@ -250,7 +250,7 @@ TEST(SensorDecoder, NmeaHeadingAndRollPitchSentencesSetTheirFlags) {
   });
   auto d = make_sensor_decoder(sensor, 0);
   feed_split(*d, stream, 0, 0, 0);
-  EXPECT_EQ(d->counters().unused, 1u);  // PIXSE SPEED_
+  EXPECT_EQ(d->counters().unused, 1u);         // PIXSE SPEED_
   EXPECT_GT(d->counters().decode_errors, 0u);  // the garbage's bad sentence
 }
 
@@ -373,9 +373,9 @@ TEST(SensorDecoder, CanDvlFromFramesAndFromCandumpLinesAgree) {
       const std::size_t half = line.size() / 2;  // a line split across two reads
       text->feed(std::span(reinterpret_cast<const std::uint8_t*>(line.data()), half),
                  f.received.realtime_us, f.received.monotonic_us, from_text);
-      text->feed(std::span(reinterpret_cast<const std::uint8_t*>(line.data()) + half,
-                           line.size() - half),
-                 f.received.realtime_us, f.received.monotonic_us, from_text);
+      text->feed(
+          std::span(reinterpret_cast<const std::uint8_t*>(line.data()) + half, line.size() - half),
+          f.received.realtime_us, f.received.monotonic_us, from_text);
     }
     if (k == 20) {
       ASSERT_FALSE(from_frames.empty());

@@ -230,8 +230,9 @@ SensorConfig parse_sensor(const YamlReader& s, const std::string& base_dir) {
   }
   if (s.has("pressure")) {
     if (sensor.type != SensorType::kPressureParo) {
-      s.at("pressure").fail(std::string("only pressure_paro sensors take a pressure block, this is ") +
-                            to_string(sensor.type));
+      s.at("pressure")
+          .fail(std::string("only pressure_paro sensors take a pressure block, this is ") +
+                to_string(sensor.type));
     }
     sensor.pressure = parse_pressure(s.at("pressure"));
   }

@@ -79,8 +79,8 @@ SensorDecoderCounters DecoderBase::merge(const drivers::DecodeStats& codec) cons
   SensorDecoderCounters c = own_;
   c.bytes = codec.bytes;
   c.messages = codec.records;
-  c.decode_errors = codec.checksum_failures + codec.malformed + codec.out_of_range +
-                    misrouted_frames_;
+  c.decode_errors =
+      codec.checksum_failures + codec.malformed + codec.out_of_range + misrouted_frames_;
   c.dropped_bytes = codec.dropped_bytes;
   c.unused += codec.unsupported;
   return c;

@@ -17,7 +17,6 @@ class DecoderBase : public SensorDecoder {
   DecoderBase(const SensorConfig& sensor, std::uint16_t sensor_index);
 
  protected:
-
   /// Measurement time valid at `validity_us`, received at `host`.
   MeasurementTime stamp(std::int64_t validity_us, const drivers::HostTime& host) const;
   /// host_monotonic - latency: the validity of a record without a usable device time.

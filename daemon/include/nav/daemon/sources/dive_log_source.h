@@ -8,14 +8,25 @@
 // Pacing: `speed` x real time on the log's host monotonic clock, or as fast as possible; in the
 // latter mode the source waits while the queue is more than half full (a replay may throttle; a
 // live driver would drop).
+//
+// Times: a RAW_* message is fed to its decoder with its own host times (utime = realtime,
+// host_monotonic_us), so measurements get exactly the validity they had on the vehicle. A
+// NAV_IMAGE becomes an ImageEvent valid at time_of_validity_us (monotonic), host_realtime =
+// utime, host_monotonic = utime minus the realtime - monotonic offset of the latest RAW_*
+// message (validity when none was seen yet), sensor_index = the config's first camera. Pacing
+// uses each event's monotonic time (RAW_*: host_monotonic_us; NAV_IMAGE: that host time).
+// A RAW_* message is matched to the config sensor whose name equals its `device` (then,
+// ignoring case, the channel suffix); others are counted in unknown_devices, not fatal.
 
 #include <atomic>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "nav/daemon/config.h"
 #include "nav/daemon/measurement_queue.h"
 #include "nav/daemon/registration_table.h"
+#include "nav/daemon/sources/sensor_decoder.h"
 
 namespace nav::daemon {
 
@@ -25,13 +36,18 @@ struct DiveLogSourceOptions {
 };
 
 struct DiveLogSourceCounters {
-  std::uint64_t events = 0;          ///< log events read
-  std::uint64_t raw_messages = 0;    ///< RAW_* messages fed to decoders
+  std::uint64_t events = 0;           ///< log events read
+  std::uint64_t raw_messages = 0;     ///< RAW_* messages fed to decoders
   std::uint64_t unknown_devices = 0;  ///< RAW_* from a sensor name not in the config
-  std::uint64_t measurements = 0;    ///< pushed to the queue (images included)
+  std::uint64_t measurements = 0;     ///< pushed to the queue (images included)
   std::uint64_t images = 0;
-  std::uint64_t decode_errors = 0;   ///< summed over the decoders
+  std::uint64_t decode_errors = 0;                             ///< summed over the decoders
   std::int64_t first_monotonic_us = 0, last_monotonic_us = 0;  ///< log's host time span
+  std::uint64_t queue_drops = 0;            ///< pushes refused by a full queue (paced mode only)
+  std::uint64_t images_without_camera = 0;  ///< NAV_IMAGE while the config has no camera
+  std::uint64_t registrations = 0;          ///< NAV_REGISTRATION events (read, not pushed)
+  /// Per config sensor (index as in NavdConfig::sensors; cameras stay zero).
+  std::vector<SensorDecoderCounters> sensors;
 };
 
 /// Reads every NAV_REGISTRATION of the log. Throws DiveLogError.

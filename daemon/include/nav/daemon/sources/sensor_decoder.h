@@ -4,15 +4,15 @@
 // out (measurement.h), through the drivers' streaming codecs, so the vehicle and a replayed
 // dive decode identically. One decoder per configured sensor (SensorConfig::type):
 //
-// | type          | wire (drivers codec)                     | measurement                        |
-// |---------------|------------------------------------------|------------------------------------|
-// | dvl_pd0       | RDI PD0 ensembles (pd0.h)                | DvlVelocity = -(bottom track X,Y,Z)|
-// | dvl_pd6       | RDI PD6 lines (pd6.h), :BI only          | DvlVelocity = :BI X,Y,Z            |
-// | dvl_can       | CAN frames (can_frame_decoder.h)         | DvlVelocity from v_{x,y,z}_mps     |
-// | heading_nmea  | HDT, PHTRO, PIXSE ATITUD/HEADNG (nmea.h) | Attitude, has_heading/has_roll_pitch|
-// | fog_kvh       | KVH DSP-3000 rate lines (kvh.h)          | AngularRate about sensor z only    |
-// | pressure_paro | Paroscientific replies, psia             | Depth (UNESCO 1983, seawater.h)    |
-// | altimeter     | Tritech PA500 lines (altimeter.h)        | Altitude                           |
+// | type          | wire (drivers codec)                 | measurement                       |
+// |---------------|--------------------------------------|-----------------------------------|
+// | dvl_pd0       | RDI PD0 ensembles (pd0.h)            | DvlVelocity = -(bottom track XYZ) |
+// | dvl_pd6       | RDI PD6 lines (pd6.h), :BI only      | DvlVelocity = :BI X, Y, Z         |
+// | dvl_can       | CAN frames (can_frame_decoder.h)     | DvlVelocity from v_{x,y,z}_mps    |
+// | heading_nmea  | HDT, PHTRO, PIXSE ATITUD/HEADNG      | Attitude, has_heading / _roll_pitch|
+// | fog_kvh       | KVH DSP-3000 rate lines (kvh.h)      | AngularRate about sensor z only   |
+// | pressure_paro | Paroscientific replies, psia         | Depth (UNESCO 1983, seawater.h)   |
+// | altimeter     | Tritech PA500 lines (altimeter.h)    | Altitude                          |
 //
 // Velocity sign: PD0 bottom-track velocity is the bottom relative to the instrument (RDI
 // manual; pd0.h), so the DVL's velocity over ground in its own (instrument) frame is its
