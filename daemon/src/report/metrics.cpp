@@ -1,0 +1,224 @@
+// Report metrics: see metrics.h and daemon/src/report/README.md.
+#include "report/metrics.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "nav/core/geometry/pose.h"
+#include "nav/core/geometry/rotation.h"
+#include "nav/core/recovery/consistency.h"
+#include "report/csv_table.h"
+
+namespace nav::report {
+namespace {
+
+using nlohmann::json;
+
+json or_null(const std::optional<double>& v) { return v ? json(*v) : json(nullptr); }
+
+std::optional<double> json_number(const json& j, const char* key) {
+  if (j.is_object() && j.contains(key) && j[key].is_number()) return j[key].get<double>();
+  return std::nullopt;
+}
+
+/// Duration of the dive, s: sim.json duration_s, else the span of truth.csv.
+std::optional<double> dive_duration_s(const DiveData* dive) {
+  if (!dive) return std::nullopt;
+  if (auto d = json_number(dive->sim, "duration_s")) return d;
+  return 1e-6 * static_cast<double>(dive->truth.back().t_us - dive->truth.front().t_us);
+}
+
+}  // namespace
+
+std::optional<core::Vec6> truth_pose_at(const std::vector<TimedPose>& truth, long long t_us) {
+  if (truth.empty() || t_us < truth.front().t_us || t_us > truth.back().t_us) return std::nullopt;
+  const auto hi = std::lower_bound(truth.begin(), truth.end(), t_us,
+                                   [](const TimedPose& p, long long t) { return p.t_us < t; });
+  if (hi->t_us == t_us || hi == truth.begin()) return hi->pose;
+  const auto lo = hi - 1;
+  const double a = static_cast<double>(t_us - lo->t_us) / static_cast<double>(hi->t_us - lo->t_us);
+  // pose_minus wraps the angle differences, so angles move along the shorter arc.
+  core::Vec6 p = lo->pose + a * core::pose_minus(hi->pose, lo->pose);
+  for (int k = 3; k < 6; ++k) p[k] = core::wrap_angle(p[k]);
+  return p;
+}
+
+XyError xy_error(const std::vector<TimedPose>& estimate, const std::vector<TimedPose>& truth,
+                 const std::string& what) {
+  XyError e;
+  double sum_sq = 0.0;
+  for (const TimedPose& row : estimate) {
+    const auto t = truth_pose_at(truth, row.t_us);
+    if (!t) {
+      ++e.outside_truth;
+      continue;
+    }
+    const double err_sq = (row.pose.head<2>() - t->head<2>()).squaredNorm();
+    sum_sq += err_sq;
+    e.final_m = std::sqrt(err_sq);
+    ++e.samples;
+  }
+  if (e.samples == 0) {
+    throw ReportError(what + ": none of its " + std::to_string(estimate.size()) +
+                      " rows lies inside the time span of truth.csv");
+  }
+  e.rms_m = std::sqrt(sum_sq / static_cast<double>(e.samples));
+  return e;
+}
+
+double chi2_quantile(double k, double z) {
+  const double c = 2.0 / (9.0 * k);
+  return k * std::pow(1.0 - c + z * std::sqrt(c), 3.0);
+}
+
+NeesResult delayed_state_nees(const std::vector<DelayedState>& states,
+                              const std::vector<TrueImage>& images,
+                              const std::vector<TimedPose>& truth) {
+  std::map<long long, core::Vec6> by_frame;
+  for (const TrueImage& im : images) by_frame[im.frame_id] = im.pose;
+  NeesResult r;
+  for (const DelayedState& s : states) {
+    std::optional<core::Vec6> true_pose;
+    if (!images.empty()) {
+      if (auto it = by_frame.find(s.frame_id); it != by_frame.end()) true_pose = it->second;
+    } else {
+      true_pose = truth_pose_at(truth, s.t_us);
+    }
+    if (!true_pose) {
+      ++r.without_truth;
+      continue;
+    }
+    const core::Vec6 err = core::pose_minus(s.pose, *true_pose);
+    const Eigen::LLT<core::Mat6> llt(0.5 * (s.exact + s.exact.transpose()));
+    if (llt.info() != Eigen::Success) {
+      throw ReportError("states.csv: exact marginal (e00..e55) of state " +
+                        std::to_string(s.state_id) + " is not positive definite");
+    }
+    r.nees.push_back(err.dot(llt.solve(err)));
+  }
+  if (r.nees.empty()) {
+    throw ReportError("NEES: no delayed state has a truth pose (" +
+                      std::to_string(states.size()) + " states)");
+  }
+  const double n = static_cast<double>(r.nees.size());
+  double sum = 0.0;
+  for (double v : r.nees) sum += v;
+  r.mean = sum / n;
+  constexpr double kZ975 = 1.959963984540054;
+  const double dof = n * core::kPoseDim;
+  r.interval_95 = {chi2_quantile(dof, -kZ975) / n, chi2_quantile(dof, kZ975) / n};
+  return r;
+}
+
+ConservativeResult conservative_bounds(const std::vector<DelayedState>& states, double tol) {
+  ConservativeResult r;
+  bool first = true;
+  for (const DelayedState& s : states) {
+    double min_eig = 0.0;
+    const bool ok = core::is_conservative(s.bound, s.exact, tol, &min_eig);
+    ++r.checked;
+    if (ok) ++r.conservative;
+    r.worst_min_eigenvalue = first ? min_eig : std::min(r.worst_min_eigenvalue, min_eig);
+    first = false;
+  }
+  return r;
+}
+
+LinkCounts count_links(const std::vector<ProposedLink>& links) {
+  LinkCounts c;
+  std::set<std::pair<long long, long long>> pairs;
+  for (const ProposedLink& l : links) {
+    ++c.proposed;
+    const bool accepted = l.outcome == "accepted";
+    if (accepted) {
+      ++c.accepted;
+      pairs.emplace(std::min(l.state_i, l.state_j), std::max(l.state_i, l.state_j));
+    }
+    if (l.outcome == "gated") ++c.gated;
+    if (l.outcome == "registration_failed") ++c.registration_failed;
+    if (l.outcome == "not_registered") ++c.not_registered;
+    if (l.is_outlier) {
+      ++c.outliers_proposed;
+      ++(accepted ? c.outliers_accepted : c.outliers_rejected);
+    }
+  }
+  c.camera_links = pairs.size();
+  return c;
+}
+
+json compute_metrics(const ReplayOutput& replay, const DiveData* dive,
+                     const MetricsOptions& options) {
+  json m;
+  const LinkCounts links = count_links(replay.links);
+  // Images of the dive: images.csv rows, else sim.json "images", else proposals.csv rows.
+  json images = nullptr;
+  if (dive && !dive->images.empty()) {
+    images = dive->images.size();
+  } else if (dive && json_number(dive->sim, "images")) {
+    images = dive->sim["images"];
+  } else if (replay.proposal_rows > 0) {
+    images = replay.proposal_rows;
+  }
+  m["images"] = images;
+  m["delayed_states"] = replay.states.size();
+  m["camera_links"] = links.camera_links;
+  m["links_proposed"] = links.proposed;
+  m["links_accepted"] = links.accepted;
+  m["links_gated"] = links.gated;
+  m["links_registration_failed"] = links.registration_failed;
+  m["links_not_registered"] = links.not_registered;
+  m["outliers_injected"] = dive && json_number(dive->sim, "outliers_injected")
+                               ? dive->sim["outliers_injected"]
+                               : json(nullptr);
+  m["outliers_proposed"] = links.outliers_proposed;
+  m["outliers_rejected"] = links.outliers_rejected;
+  m["outliers_accepted"] = links.outliers_accepted;
+
+  if (dive) {
+    const XyError dr = xy_error(replay.dead_reckoning, dive->truth, "dead_reckoning.csv");
+    const XyError slam = xy_error(replay.trajectory, dive->truth, "trajectory.csv");
+    m["dr_xy_rms_m"] = dr.rms_m;
+    m["dr_final_xy_error_m"] = dr.final_m;
+    m["slam_xy_rms_m"] = slam.rms_m;
+    m["slam_final_xy_error_m"] = slam.final_m;
+    m["xy_error_samples"] = {{"dead_reckoning", dr.samples}, {"slam", slam.samples}};
+    m["xy_error_rows_outside_truth"] = {{"dead_reckoning", dr.outside_truth},
+                                        {"slam", slam.outside_truth}};
+    if (!replay.states.empty()) {
+      const NeesResult nees = delayed_state_nees(replay.states, dive->images, dive->truth);
+      m["nees_mean"] = nees.mean;
+      m["nees_95_interval"] = {nees.interval_95.first, nees.interval_95.second};
+      m["nees_states"] = nees.nees.size();
+      m["nees_dof_per_state"] = core::kPoseDim;
+      m["nees_states_without_truth"] = nees.without_truth;
+      m["nees_within_interval"] =
+          nees.mean >= nees.interval_95.first && nees.mean <= nees.interval_95.second;
+    }
+  }
+  for (const char* key : {"dr_xy_rms_m", "slam_xy_rms_m", "slam_final_xy_error_m", "nees_mean",
+                          "nees_95_interval"}) {
+    if (!m.contains(key)) m[key] = nullptr;
+  }
+
+  const ConservativeResult cons = conservative_bounds(replay.states, options.conservative_tolerance);
+  m["conservative_fraction"] = cons.checked ? json(cons.fraction()) : json(nullptr);
+  m["conservative_checked"] = cons.checked;
+  m["conservative_worst_min_eigenvalue"] = cons.checked ? json(cons.worst_min_eigenvalue)
+                                                        : json(nullptr);
+  m["conservative_tolerance"] = options.conservative_tolerance;
+
+  const std::optional<double> wall_s = json_number(replay.summary, "wall_s");
+  std::optional<double> rtf = json_number(replay.summary, "realtime_factor");
+  if (!rtf && wall_s && *wall_s > 0.0) {
+    if (auto d = dive_duration_s(dive)) rtf = *d / *wall_s;
+  }
+  m["wall_s"] = or_null(wall_s);
+  m["realtime_factor"] = or_null(rtf);
+  m["dive_duration_s"] = or_null(dive_duration_s(dive));
+  return m;
+}
+
+}  // namespace nav::report

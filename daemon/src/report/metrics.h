@@ -1,0 +1,84 @@
+#pragma once
+// The report's metrics (metrics.json): trajectory errors against the simulator's truth, NEES of
+// the delayed states with their exact marginals, conservativeness of the stored bounds, link
+// and outlier counts (Eustice et al., RSS 2005, Sec. V; how each is computed: daemon/src/report/
+// README.md).
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "report/replay_data.h"
+
+namespace nav::report {
+
+/// Truth pose at t_us, linearly interpolated between the bracketing truth.csv rows (angles
+/// along the shorter arc); nothing outside [first, last] t_us. `truth` sorted by time.
+std::optional<core::Vec6> truth_pose_at(const std::vector<TimedPose>& truth, long long t_us);
+
+/// Horizontal (x, y) error of an estimated trajectory against interpolated truth.
+struct XyError {
+  double rms_m = 0.0;        ///< sqrt(mean(dx^2 + dy^2)) over the rows inside the truth span
+  double final_m = 0.0;      ///< |(dx, dy)| of the last row inside the truth span
+  size_t samples = 0;        ///< rows used
+  size_t outside_truth = 0;  ///< rows whose t_us lies outside truth.csv (not used)
+};
+/// Throws ReportError when no row lies inside the truth span (`what` names the estimate).
+XyError xy_error(const std::vector<TimedPose>& estimate, const std::vector<TimedPose>& truth,
+                 const std::string& what);
+
+/// Wilson-Hilferty approximation of the chi-square quantile with k degrees of freedom at the
+/// standard-normal quantile z (2.5 % low at the lower 2.5 % point for k = 6; 4e-6 relative
+/// at k = 600: the report uses k = 6 x number of states).
+double chi2_quantile(double k, double z);
+
+/// NEES e' E^-1 e of each delayed state's pose error (estimate - truth, angles wrapped) with
+/// its exact marginal E (6 dof), and the two-sided 95 % interval of their mean:
+/// [chi2_q(N d, 0.025), chi2_q(N d, 0.975)] / N (Bar-Shalom et al. 2001, Sec. 5.4).
+struct NeesResult {
+  std::vector<double> nees;  ///< per state with a truth pose
+  double mean = 0.0;
+  std::pair<double, double> interval_95{0.0, 0.0};
+  size_t without_truth = 0;  ///< states whose truth pose could not be found
+};
+/// Truth per state: images.csv by frame_id when given, else truth.csv interpolated at t_us.
+/// Throws ReportError when no state has a truth pose or an exact marginal is not SPD.
+NeesResult delayed_state_nees(const std::vector<DelayedState>& states,
+                              const std::vector<TrueImage>& images,
+                              const std::vector<TimedPose>& truth);
+
+/// How many stored bounds are conservative: bound - exact PSD (core/recovery/consistency.h,
+/// relative tolerance `tol`), and the worst smallest eigenvalue of bound - exact.
+struct ConservativeResult {
+  size_t checked = 0;
+  size_t conservative = 0;
+  double worst_min_eigenvalue = 0.0;
+  double fraction() const { return checked ? static_cast<double>(conservative) / checked : 0.0; }
+};
+ConservativeResult conservative_bounds(const std::vector<DelayedState>& states, double tol);
+
+/// Counts over links.csv.
+struct LinkCounts {
+  size_t proposed = 0;             ///< rows
+  size_t accepted = 0;             ///< outcome == accepted
+  size_t gated = 0;                ///< outcome == gated
+  size_t registration_failed = 0;  ///< outcome == registration_failed
+  size_t not_registered = 0;       ///< outcome == not_registered
+  size_t camera_links = 0;         ///< distinct accepted (state_i, state_j) pairs
+  size_t outliers_proposed = 0;    ///< is_outlier
+  size_t outliers_rejected = 0;    ///< is_outlier && outcome != accepted
+  size_t outliers_accepted = 0;    ///< is_outlier && outcome == accepted
+};
+LinkCounts count_links(const std::vector<ProposedLink>& links);
+
+struct MetricsOptions {
+  double conservative_tolerance = 1e-9;  ///< relative tolerance of the PSD check
+};
+
+/// Everything in metrics.json. `dive` may be null (no truth: error metrics are null).
+nlohmann::json compute_metrics(const ReplayOutput& replay, const DiveData* dive,
+                               const MetricsOptions& options);
+
+}  // namespace nav::report
