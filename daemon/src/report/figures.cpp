@@ -80,12 +80,12 @@ cv::Mat trajectory_figure(const std::vector<TimedPose>& dead_reckoning,
   plot.set_subtitle(subtitle);
   plot.set_labels("East y [m]", "North x [m]");
   if (!truth_pts.empty()) {
-    plot.polyline(truth_pts, colors::kBlack, 2);
+    plot.polyline(truth_pts, colors::kBlack, 3);
     plot.add_legend("truth (truth.csv)", colors::kBlack);
   }
-  plot.polyline(dr_pts, colors::kRed, 1);
+  plot.polyline(dr_pts, colors::kRed, 2);
   plot.add_legend("dead reckoning", colors::kRed);
-  plot.polyline(slam_pts, colors::kBlue, 1);
+  plot.polyline(slam_pts, colors::kBlue, 2);
   plot.add_legend("SLAM (running estimate)", colors::kBlue);
   if (!slam_pts.empty()) plot.markers({slam_pts.front()}, colors::kGreen, 5);
   plot.add_note("green dot: start");
