@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "nav/testing/data.h"
 #include "support/navtool_run.h"
 #include "support/report_fixture.h"
 
@@ -19,6 +20,17 @@ namespace fs = std::filesystem;
 using nav::tool::test::read_text;
 using nav::tool::test::run_navtool;
 using nlohmann::json;
+
+/// Removes this process's temporary directories after the last test.
+class RemoveTempDirs : public ::testing::Environment {
+ public:
+  void TearDown() override {
+    std::error_code ignored;
+    fs::remove_all(fs::temp_directory_path() / ("navtool_report_test_" + std::to_string(::getpid())), ignored);
+  }
+};
+[[maybe_unused]] ::testing::Environment* const kRemoveTempDirs =
+    ::testing::AddGlobalTestEnvironment(new RemoveTempDirs);
 
 fs::path fresh_dir(const std::string& name) {
   const fs::path dir =
@@ -192,6 +204,34 @@ TEST(NavtoolReport, ShortRowAndMissingFileAreErrors) {
   r = run_navtool(report_args(root / "out", {}, ""));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("links.csv: cannot open"), std::string::npos) << r.err;
+}
+
+}  // namespace
+
+namespace {
+
+TEST(NavtoolCovarianceFigure, WritesTheFig3HistogramOfAPoseGraph) {
+  NAV_REQUIRE_DATA(graph, "posegraphs/tinyGrid3D.g2o");
+  const fs::path root = fresh_dir("covariance_figure");
+  std::ostringstream args;
+  args << "covariance '" << graph.string() << "' --json --direct --figure '"
+       << (root / "fig3.png").string() << "'";
+  const auto r = run_navtool(args.str());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json out = json::parse(r.out);
+  EXPECT_EQ(out["figure"], (root / "fig3.png").string());
+  const cv::Mat img = cv::imread((root / "fig3.png").string(), cv::IMREAD_COLOR);
+  ASSERT_FALSE(img.empty());
+  EXPECT_EQ(img.cols, 1000);
+  EXPECT_EQ(img.rows, 800);
+  EXPECT_GT(pixels_near(img, cv::Vec3b(200, 90, 20)), 500);  // ours: blue bars
+  // An unwritable path is an error naming it.
+  std::ostringstream bad;
+  bad << "covariance '" << graph.string() << "' --direct --figure '"
+      << (root / "no/such/dir/fig3.png").string() << "'";
+  const auto e = run_navtool(bad.str());
+  EXPECT_NE(e.exit_code, 0);
+  EXPECT_NE(e.err.find("no/such/dir/fig3.png"), std::string::npos) << e.err;
 }
 
 }  // namespace

@@ -16,6 +16,17 @@ namespace {
 
 namespace fs = std::filesystem;
 
+/// Removes this process's temporary directories after the last test.
+class RemoveTempDirs : public ::testing::Environment {
+ public:
+  void TearDown() override {
+    std::error_code ignored;
+    fs::remove_all(fs::temp_directory_path() / ("report_metrics_test_" + std::to_string(::getpid())), ignored);
+  }
+};
+[[maybe_unused]] ::testing::Environment* const kRemoveTempDirs =
+    ::testing::AddGlobalTestEnvironment(new RemoveTempDirs);
+
 fs::path fixture_root(const std::string& name) {
   const fs::path dir = fs::temp_directory_path() /
                        ("report_metrics_test_" + std::to_string(::getpid())) / name;

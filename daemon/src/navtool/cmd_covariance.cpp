@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -22,6 +23,8 @@
 #include "nav/core/recovery/consistency.h"
 #include "nav/core/recovery/exact_marginals.h"
 #include "navtool/commands.h"
+#include "report/csv_table.h"
+#include "report/figures.h"
 
 namespace nav::tool {
 namespace {
@@ -40,6 +43,7 @@ struct CovarianceArgs {
   bool no_markov_blanket = false;
   int histogram_bins = 20;
   double conservative_tolerance = 1e-9;
+  std::string figure;  ///< Fig. 3 PNG path (empty: none)
 };
 
 double elapsed_ms(Clock::time_point since) {
@@ -196,6 +200,18 @@ void run_covariance(const CovarianceArgs& args) {
                  static_cast<double>(delayed));
   out["fig3_histogram"] = histogram_json(check.logdet_ratio_ours,
                                          check.logdet_ratio_markov_blanket, args.histogram_bins);
+  if (!args.figure.empty()) {
+    try {
+      report::write_png(args.figure, report::logdet_histogram_figure(
+                                         check.logdet_ratio_ours, check.logdet_ratio_markov_blanket,
+                                         args.histogram_bins,
+                                         "Fig. 3  log det(bound) - log det(exact) per delayed "
+                                         "state: " + std::filesystem::path(args.file).filename().string()));
+    } catch (const report::ReportError& e) {
+      throw CommandError(std::string("covariance: --figure: ") + e.what());
+    }
+    out["figure"] = args.figure;
+  }
   out["peak_rss_mb"] = peak_rss_mb();
   if (args.json) {
     std::cout << out.dump() << std::endl;
@@ -237,6 +253,8 @@ void add_covariance(CLI::App& app) {
                 "skip the Markov-blanket comparison");
   cmd->add_option("--bins", args->histogram_bins, "Fig. 3 histogram bins")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--figure", args->figure,
+                  "write the Fig. 3 histogram (ours vs Markov blanket) as a PNG to this path");
   cmd->add_option("--conservative-tolerance", args->conservative_tolerance,
                   "relative tolerance of the PSD check of bound - exact")
       ->check(CLI::NonNegativeNumber);

@@ -154,7 +154,7 @@ cv::Mat logdet_histogram_figure(const std::vector<double>& ours,
   const auto c_ours = count(ours), c_mb = count(markov_blanket);
   const int peak = std::max(*std::max_element(c_ours.begin(), c_ours.end()),
                             *std::max_element(c_mb.begin(), c_mb.end()));
-  Plot plot(lo, hi, 0.0, 1.08 * peak, style);
+  Plot plot(lo, hi, 0.0, 1.3 * peak, style);  // headroom: the legend sits top right
   plot.set_title(title);
   auto share = [](const std::vector<double>& v) {
     const auto pos = std::count_if(v.begin(), v.end(), [](double x) { return x >= 0.0; });
