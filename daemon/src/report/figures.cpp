@@ -264,7 +264,7 @@ cv::Mat network_figure(const std::vector<DelayedState>& states,
   plot.add_legend("current conservative bound", colors::kBlue);
   plot.add_legend("exact marginal", colors::kRed);
   plot.add_note(fmt("%g-sigma ellipses inflated x", options.sigmas) + fmt("%g", inflation));
-  if (stride > 1) plot.add_note("ellipses of every " + std::to_string(stride) + "th state");
+  if (stride > 1) plot.add_note("ellipses of 1 in " + std::to_string(stride) + " states");
   return plot.image();
 }
 
