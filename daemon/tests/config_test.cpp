@@ -71,7 +71,7 @@ TEST(Config, SimYamlLoads) {
   EXPECT_DOUBLE_EQ(c.sensors[0].mount.lever_arm_m[0], 0.5);
   const SensorConfig& cam = c.sensors[4];
   EXPECT_EQ(cam.type, SensorType::kCameraGige);
-  EXPECT_DOUBLE_EQ(cam.camera.fx_px, 1600.0);
+  EXPECT_DOUBLE_EQ(cam.camera.fx_px, 1000.0);
   EXPECT_EQ(cam.camera.distortion.size(), 5u);
   EXPECT_EQ(cam.camera.pixel_format, PixelFormat::kMono12);
   EXPECT_EQ(cam.camera.trigger, Trigger::kSoftware);
