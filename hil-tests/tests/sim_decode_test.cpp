@@ -45,10 +45,11 @@ struct Residuals {
   std::int64_t max_latency_us = 0;
 };
 
-/// The tick (on the 50 ms sensor grid) at or before a host time: the time of validity of an
-/// ASCII sensor whose config latency is 0 and jitter < 50 ms.
-std::int64_t validity_of(std::int64_t host_us, const TruthTable& truth) {
-  return truth.t0_us + (host_us - truth.t0_us) / 50000 * 50000;
+/// The tick (on the 50 ms sensor grid) at or before host time - config latency: the time of
+/// validity of a sample (the simulator's jitter and inter-sentence gap are < 50 ms).
+std::int64_t validity_of(std::int64_t host_us, double latency_s, const TruthTable& truth) {
+  const std::int64_t since = host_us - std::llround(latency_s * 1e6) - truth.t0_us;
+  return truth.t0_us + since / 50000 * 50000;
 }
 
 Residuals decode_dive(const std::filesystem::path& dir, const SimSummary& s,
@@ -82,9 +83,16 @@ Residuals decode_dive(const std::filesystem::path& dir, const SimSummary& s,
     EXPECT_EQ(raw->utime, realtime_of(raw->host_monotonic_us));
     const drivers::HostTime host{raw->host_monotonic_us, raw->utime};
     const std::span<const std::uint8_t> bytes(raw->data.data(), raw->data.size());
-    const std::int64_t t = validity_of(raw->host_monotonic_us, truth);
+    const daemon::SensorConfig* sensor = nullptr;
+    for (const daemon::SensorConfig& c : cfg.sensors)
+      if (c.name == raw->device) sensor = &c;
+    EXPECT_NE(sensor, nullptr) << raw->device;
+    if (!sensor) continue;
+    const std::int64_t t = validity_of(raw->host_monotonic_us, sensor->latency_s, truth);
     const core::Vec12& x = truth.at(t);
-    r.max_latency_us = std::max(r.max_latency_us, raw->host_monotonic_us - t);
+    // Host time beyond validity + the config latency: jitter and the gap after a sentence.
+    r.max_latency_us = std::max<std::int64_t>(r.max_latency_us, raw->host_monotonic_us - t -
+                                                      std::llround(sensor->latency_s * 1e6));
     if (raw->device == "dvl") {
       ens.clear();
       pd0.feed(bytes, host, ens);
@@ -164,7 +172,7 @@ TEST(SimDecode, IdealSensorsDecodeToTruthWithinTheirNoise) {
   EXPECT_NEAR(r.depth.rms(), 0.01, 0.001);
   EXPECT_NEAR(r.depth.mean(), 0.0, 0.001);
   EXPECT_GT(r.heading.n, 9000);
-  // Config latency 0: host time = validity + jitter (<= 2 ms) + the gap after HDT (< 3 ms).
+  // host time = validity + config latency + jitter (<= 2 ms) + the gap after HDT (< 3 ms).
   EXPECT_LE(r.max_latency_us, 5000);
 }
 
