@@ -263,6 +263,17 @@ TEST(Config, LatencyAndPressureKeys) {
   EXPECT_EQ(e.key_path(), "sensors[0].pressure.latitude");
 }
 
+TEST(Config, CameraImageDirectory) {
+  const NavdConfig c = parse_config(
+      "sensors:\n  - name: c\n    type: camera_gige\n    transport: {type: sim}\n"
+      "    camera: {fx: 1, fy: 1, cx: 1, cy: 1, image_dir: /data/dive/images}\n");
+  EXPECT_EQ(c.sensors[0].camera.image_dir, "/data/dive/images");
+  EXPECT_EQ(expect_error("sensors:\n  - name: c\n    type: camera_gige\n    transport: {type: "
+                         "sim}\n    camera: {fx: 1, fy: 1, cx: 1, cy: 1, image_dir: [1]}\n")
+                .key_path(),
+            "sensors[0].camera.image_dir");
+}
+
 TEST(Config, BadCanSignalTableStopsAtTheKey) {
   const std::string table = testing::TempDir() + "navd_config_test_bad_can.yaml";
   {

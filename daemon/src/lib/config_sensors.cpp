@@ -177,7 +177,8 @@ NoiseSigmas parse_noise(const YamlReader& n, SensorType type) {
 }
 
 CameraConfig parse_camera(const YamlReader& c) {
-  c.expect_map({"fx", "fy", "cx", "cy", "distortion", "pixel_format", "trigger", "frame_rate_hz"});
+  c.expect_map({"fx", "fy", "cx", "cy", "distortion", "pixel_format", "trigger", "frame_rate_hz",
+                "image_dir"});
   CameraConfig cam;
   c.read("fx", cam.fx_px, 1e-3, 1e6, true);
   c.read("fy", cam.fy_px, 1e-3, 1e6, true);
@@ -203,6 +204,7 @@ CameraConfig parse_camera(const YamlReader& c) {
                {"software", Trigger::kSoftware},
                {"hardware", Trigger::kHardware}});
   c.read("frame_rate_hz", cam.frame_rate_hz, 1e-3, 100.0);
+  c.read("image_dir", cam.image_dir);
   return cam;
 }
 

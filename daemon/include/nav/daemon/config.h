@@ -102,6 +102,9 @@ struct CameraConfig {
   PixelFormat pixel_format = PixelFormat::kMono8;
   Trigger trigger = Trigger::kFreeRun;
   double frame_rate_hz = 1.0;  ///< images per second [1e-3, 100]
+  /// image_dir: where navd writes each frame as a 16-bit PNG (the dive directory's images/);
+  /// empty (default): frames are not written.
+  std::string image_dir;
 };
 
 /// Pressure-to-depth conversion (UNESCO 1983, drivers/codecs/seawater.h), pressure_paro only.
