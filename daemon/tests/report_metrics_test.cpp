@@ -166,6 +166,7 @@ TEST(Metrics, NeesOfOneStateByHand) {
   const NeesResult r = delayed_state_nees({s}, {im}, {});
   ASSERT_EQ(r.nees.size(), 1u);
   EXPECT_NEAR(r.mean, (4.0 + 0.01) / 4.0, 1e-9);
+  EXPECT_NEAR(r.xy_rms_m, 2.0, 1e-12);
 }
 
 TEST(Metrics, NeesOfStatesDrawnFromTheirCovarianceIsNearTheDof) {

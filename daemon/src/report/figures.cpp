@@ -68,8 +68,15 @@ double major_sigma(const core::Mat6& cov) {
 cv::Mat trajectory_figure(const std::vector<TimedPose>& dead_reckoning,
                           const std::vector<TimedPose>& slam, const std::vector<TimedPose>& truth,
                           const std::string& subtitle, const PlotStyle& style_in) {
+  // Truth over the replayed span only (a replay may cover part of the dive).
+  std::vector<TimedPose> truth_span;
+  for (const auto& p : truth) {
+    if (slam.empty() || (p.t_us >= slam.front().t_us && p.t_us <= slam.back().t_us)) {
+      truth_span.push_back(p);
+    }
+  }
   Bounds b;
-  const auto truth_pts = map_points(truth, b);
+  const auto truth_pts = map_points(truth_span, b);
   const auto dr_pts = map_points(dead_reckoning, b);
   const auto slam_pts = map_points(slam, b);
   if (b.empty()) throw ReportError("Fig. 1: no trajectory rows to draw");
@@ -80,7 +87,7 @@ cv::Mat trajectory_figure(const std::vector<TimedPose>& dead_reckoning,
   plot.set_subtitle(subtitle);
   plot.set_labels("East y [m]", "North x [m]");
   if (!truth_pts.empty()) {
-    plot.polyline(truth_pts, colors::kBlack, 3);
+    plot.polyline(truth_pts, colors::kBlack, 2);
     plot.add_legend("truth (truth.csv)", colors::kBlack);
   }
   plot.polyline(dr_pts, colors::kRed, 2);

@@ -80,6 +80,7 @@ NeesResult delayed_state_nees(const std::vector<DelayedState>& states,
   std::map<long long, core::Vec6> by_frame;
   for (const TrueImage& im : images) by_frame[im.frame_id] = im.pose;
   NeesResult r;
+  double sum_xy_sq = 0.0;
   for (const DelayedState& s : states) {
     std::optional<core::Vec6> true_pose;
     if (!images.empty()) {
@@ -92,6 +93,7 @@ NeesResult delayed_state_nees(const std::vector<DelayedState>& states,
       continue;
     }
     const core::Vec6 err = core::pose_minus(s.pose, *true_pose);
+    sum_xy_sq += err.head<2>().squaredNorm();
     const Eigen::LLT<core::Mat6> llt(0.5 * (s.exact + s.exact.transpose()));
     if (llt.info() != Eigen::Success) {
       throw ReportError("states.csv: exact marginal (e00..e55) of state " +
@@ -107,6 +109,7 @@ NeesResult delayed_state_nees(const std::vector<DelayedState>& states,
   double sum = 0.0;
   for (double v : r.nees) sum += v;
   r.mean = sum / n;
+  r.xy_rms_m = std::sqrt(sum_xy_sq / n);
   constexpr double kZ975 = 1.959963984540054;
   const double dof = n * core::kPoseDim;
   r.interval_95 = {chi2_quantile(dof, -kZ975) / n, chi2_quantile(dof, kZ975) / n};
@@ -189,6 +192,7 @@ json compute_metrics(const ReplayOutput& replay, const DiveData* dive,
                                         {"slam", slam.outside_truth}};
     if (!replay.states.empty()) {
       const NeesResult nees = delayed_state_nees(replay.states, dive->images, dive->truth);
+      m["states_xy_rms_m"] = nees.xy_rms_m;
       m["nees_mean"] = nees.mean;
       m["nees_95_interval"] = {nees.interval_95.first, nees.interval_95.second};
       m["nees_states"] = nees.nees.size();

@@ -39,6 +39,7 @@ double chi2_quantile(double k, double z);
 /// [chi2_q(N d, 0.025), chi2_q(N d, 0.975)] / N (Bar-Shalom et al. 2001, Sec. 5.4).
 struct NeesResult {
   std::vector<double> nees;  ///< per state with a truth pose
+  double xy_rms_m = 0.0;     ///< XY RMS of the final state means against the same truth poses
   double mean = 0.0;
   std::pair<double, double> interval_95{0.0, 0.0};
   size_t without_truth = 0;  ///< states whose truth pose could not be found

@@ -40,10 +40,13 @@ void widen(double& lo, double& hi) {
 std::vector<double> nice_ticks(double lo, double hi, int target) {
   const double raw = (hi - lo) / std::max(target, 1);
   const double mag = std::pow(10.0, std::floor(std::log10(raw)));
+  // The 1-2-5 step whose interval count is closest to the target.
   double step = mag;
-  for (double m : {1.0, 2.0, 5.0, 10.0}) {
-    step = m * mag;
-    if (step >= raw) break;
+  for (double m : {2.0, 5.0, 10.0}) {
+    const double target_d = static_cast<double>(std::max(target, 1));
+    if (std::abs((hi - lo) / (m * mag) - target_d) < std::abs((hi - lo) / step - target_d)) {
+      step = m * mag;
+    }
   }
   std::vector<double> ticks;
   for (double t = std::ceil(lo / step) * step; t <= hi + 1e-9 * step; t += step) {

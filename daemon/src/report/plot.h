@@ -87,7 +87,7 @@ class Plot {
   std::vector<std::string> notes_;
 };
 
-/// Tick positions with a 1-2-5 step covering [lo, hi] with about `target` ticks.
+/// Tick positions in [lo, hi] with the 1-2-5 step giving the interval count closest to `target`.
 std::vector<double> nice_ticks(double lo, double hi, int target = 6);
 /// A tick label: as few decimals as the tick step needs ("-1.5", "200", "0.02").
 std::string tick_label(double value, double step);
