@@ -19,6 +19,7 @@
 
 #include "nav/daemon/dive_log.h"
 #include "nav/daemon/sources/camera_source.h"
+#include "nav/daemon/sources/device_sources.h"
 #include "nav/drivers/codecs/can_signals.h"
 #include "nav/drivers/codecs/nmea.h"
 #include "nav/drivers/config/can_config.h"
@@ -405,6 +406,48 @@ TEST(DeviceSource, CameraFramesBecomeImageEventsMetadataAndPngs) {
   EXPECT_EQ(m.thumbnail_num_bytes, 64 * 48);
   EXPECT_EQ(m.thumbnail[63], 252);  // 63 * 64 = 4032 counts of 12 bits -> 252 of 8 bits
   fs::remove_all(dir);
+}
+
+TEST(DeviceSources, OneThreadPerDeviceSensorFromTheConfig) {
+  Pty pty;
+  ASSERT_GE(pty.master, 0);
+  NavdConfig config;
+  config.sensors.push_back(sensor("sim_dvl", SensorType::kDvlPd0));  // sim: no thread
+  SensorConfig heading = sensor("heading", SensorType::kHeadingNmea);
+  heading.transport = SerialTransport{pty.slave_path, 115200, Parity::kNone, FlowControl::kNone};
+  config.sensors.push_back(heading);
+  SensorConfig dvl = can_dvl();
+  std::get<CanTransport>(dvl.transport).interface = "navd_no_such_can";
+  config.sensors.push_back(dvl);
+  SensorHealthBoard board(config);
+  MeasurementQueue queue(256);
+  std::atomic<bool> stop{false};
+  DeviceSourcesOptions options;
+  options.loop.read_timeout = 50ms;
+  options.loop.reconnect_initial = 10ms;
+  options.loop.reconnect_max = 50ms;
+  DeviceSources sources(config, queue, nullptr, board, options);
+  EXPECT_EQ(sources.start(stop), 2u);
+  ASSERT_TRUE(wait_until([&] { return board.at(1).measurements.load() >= 3; }, 5s,
+                         [&] { pty.send(hdt(33.0)); }));
+  // The CAN bus cannot be opened here (no CAN in the kernel, or no such interface): the thread
+  // keeps retrying with backoff and counts it.
+  ASSERT_TRUE(wait_until([&] { return board.at(2).open_failures.load() >= 2; }, 3s, nullptr));
+  const auto t0 = std::chrono::steady_clock::now();
+  stop.store(true);
+  sources.join();
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 1s);
+  EXPECT_FALSE(board.at(0).active.load());
+  EXPECT_TRUE(board.at(1).active.load());
+  EXPECT_FALSE(board.at(2).connected.load());
+  std::vector<Measurement> got;
+  queue.pop_bulk(got, 1000);
+  ASSERT_FALSE(got.empty());
+  EXPECT_EQ(time_of(got[0]).sensor_index, 1);
+  const auto names = board.snapshot(0);
+  ASSERT_EQ(names.size(), 2u);
+  EXPECT_EQ(names[0].name, "heading");
+  EXPECT_EQ(names[1].name, "dvl_can");
 }
 
 TEST(SensorHealthBoard, SnapshotReportsActiveSensorsWithRates) {
