@@ -138,7 +138,8 @@ Residuals decode_dive(const std::filesystem::path& dir, const SimSummary& s,
       for (const drivers::AltimeterRecord& a : ranges) EXPECT_TRUE(a.range_m.has_value());
     }
   }
-  EXPECT_EQ(pd0.stats().checksum_failures + pd0.stats().malformed + pd0.stats().dropped_bytes, 0u);
+  EXPECT_EQ(pd0.stats().checksum_failures + pd0.stats().malformed + pd0.stats().dropped_bytes +
+                pd0.stats().out_of_range, 0u);
   EXPECT_EQ(nmea.stats().checksum_failures + nmea.stats().malformed, 0u);
   EXPECT_EQ(paro.stats().records, static_cast<std::uint64_t>(s.sensors.depth_replies));
   EXPECT_EQ(alt.stats().records, static_cast<std::uint64_t>(s.sensors.altimeter_lines));

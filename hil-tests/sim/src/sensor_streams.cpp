@@ -24,6 +24,7 @@ constexpr std::int64_t kDepthPeriodUs = 500000;     // 2 Hz
 constexpr std::int64_t kAltimeterPeriodUs = 200000; // 5 Hz
 constexpr std::int64_t kAltimeterOffsetUs = 100000; // altimeter pings between DVL pings
 constexpr std::int64_t kDepthOffsetUs = 250000;
+constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr double kBeamAngleRad = 30.0 * std::numbers::pi / 180.0;
 
 bool due(std::int64_t t_us, std::int64_t period_us, std::int64_t offset_us) {
@@ -162,6 +163,13 @@ void SensorStreams::sample_dvl(std::int64_t t_us, const core::Vec12& x, std::vec
   e.salinity_ppt = 35.0;
   e.sound_speed_mps = 1500.0;
   e.depth_m = p_dvl.z();
+  // The DVL's own compass and tilt sensors (not used by navd): the instrument's attitude with
+  // a compass error of ~1 deg and tilt errors of ~0.2 deg.
+  const core::Vec3 rpy_dvl = core::euler_from_rotation(R_world_body * R_body_dvl);
+  e.heading_rad = std::fmod(rpy_dvl[2] + gauss(dvl_, 1.0 * kDegToRad) + 4.0 * std::numbers::pi,
+                            2.0 * std::numbers::pi);
+  e.pitch_rad = rpy_dvl[1] + gauss(dvl_, 0.2 * kDegToRad);
+  e.roll_rad = rpy_dvl[0] + gauss(dvl_, 0.2 * kDegToRad);
   e.pressure_dbar = unesco1983_sea_pressure_dbar(p_dvl.z(), depth_.config->pressure.latitude_deg * std::numbers::pi / 180.0);
 
   drivers::Pd0BottomTrack bt;
