@@ -1,15 +1,12 @@
 #pragma once
-// CRC-32 (IEEE 802.3 / zlib / PNG: reflected polynomial 0xEDB88320, initial value and final XOR
-// 0xFFFFFFFF), table driven. Check value: crc32("123456789") == 0xCBF43926.
+// CRC-32 (IEEE 802.3) of the checkpoint files: the implementation lives in nav_core
+// (nav/core/serialization/crc32.h), shared with the map section container.
 
-#include <cstddef>
-#include <cstdint>
-#include <span>
+#include "nav/core/serialization/crc32.h"
 
 namespace nav::daemon {
 
-/// Continues a CRC: crc32(a + b) == crc32_update(crc32(a), b); crc32_update(0, x) == crc32(x).
-std::uint32_t crc32_update(std::uint32_t crc, std::span<const std::uint8_t> data);
-inline std::uint32_t crc32(std::span<const std::uint8_t> data) { return crc32_update(0, data); }
+using nav::core::crc32;
+using nav::core::crc32_update;
 
 }  // namespace nav::daemon

@@ -40,6 +40,7 @@ class BlockVector {
   const Eigen::VectorXd& dense() const;
 
  private:
+  friend struct MapCodecAccess;  // checkpoints: serialization/map_codec.cpp
   static constexpr size_t kMaxTracked = 64;
   void mark(int i);
 

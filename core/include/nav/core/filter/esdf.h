@@ -103,6 +103,7 @@ class Esdf {
   const UpdateStats& last_stats() const { return stats_; }
 
  private:
+  friend struct MapCodecAccess;  // checkpoints: serialization/map_codec.cpp
   Status check_block(int block, const char* where) const;
   Status check_measurement(const MeasVec& z, const MeasVec& h, const MeasJac* H1,
                            const MeasJac* H2, const MeasCov& R, const char* where,

@@ -85,6 +85,7 @@ class InformationMatrix {
   size_t blocks_written() const { return blocks_written_; }
 
  private:
+  friend struct MapCodecAccess;  // checkpoints: serialization/map_codec.cpp
   struct Entry {
     int col;
     Block block;

@@ -131,6 +131,7 @@ class CovarianceBounds {
   int num_bounds() const { return num_bounds_; }
 
  private:
+  friend struct MapCodecAccess;  // checkpoints: serialization/map_codec.cpp
   struct Entry {
     bool present = false;
     Eigen::MatrixXd bound;

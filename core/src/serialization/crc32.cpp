@@ -1,9 +1,9 @@
-// CRC-32 (IEEE 802.3), byte-wise table (Sarwate 1988): see crc32.h.
-#include "nav/daemon/crc32.h"
+// CRC-32 (IEEE 802.3), byte-wise table (Sarwate 1988): see nav/core/serialization/crc32.h.
+#include "nav/core/serialization/crc32.h"
 
 #include <array>
 
-namespace nav::daemon {
+namespace nav::core {
 namespace {
 
 constexpr std::array<std::uint32_t, 256> make_table() {
@@ -26,4 +26,4 @@ std::uint32_t crc32_update(std::uint32_t crc, std::span<const std::uint8_t> data
   return c ^ 0xFFFFFFFFu;
 }
 
-}  // namespace nav::daemon
+}  // namespace nav::core
