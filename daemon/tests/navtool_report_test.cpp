@@ -26,7 +26,8 @@ class RemoveTempDirs : public ::testing::Environment {
  public:
   void TearDown() override {
     std::error_code ignored;
-    fs::remove_all(fs::temp_directory_path() / ("navtool_report_test_" + std::to_string(::getpid())), ignored);
+    fs::remove_all(
+        fs::temp_directory_path() / ("navtool_report_test_" + std::to_string(::getpid())), ignored);
   }
 };
 [[maybe_unused]] ::testing::Environment* const kRemoveTempDirs =
@@ -80,11 +81,10 @@ TEST(NavtoolReport, FixtureGivesExactMetricsAndFourFigures) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json m = json::parse(r.out);
   EXPECT_EQ(m, json::parse(read_text(root / "out/metrics.json")));
-  for (const char* key : {"images", "camera_links", "links_proposed", "links_accepted",
-                          "outliers_injected", "outliers_rejected", "dr_xy_rms_m",
-                          "slam_xy_rms_m", "slam_final_xy_error_m", "nees_mean",
-                          "nees_95_interval", "conservative_fraction", "wall_s",
-                          "realtime_factor"}) {
+  for (const char* key :
+       {"images", "camera_links", "links_proposed", "links_accepted", "outliers_injected",
+        "outliers_rejected", "dr_xy_rms_m", "slam_xy_rms_m", "slam_final_xy_error_m", "nees_mean",
+        "nees_95_interval", "conservative_fraction", "wall_s", "realtime_factor"}) {
     ASSERT_TRUE(m.contains(key)) << key;
     EXPECT_FALSE(m[key].is_null()) << key;
   }
@@ -109,8 +109,8 @@ TEST(NavtoolReport, FixtureGivesExactMetricsAndFourFigures) {
   EXPECT_DOUBLE_EQ(m["logdet_ratio_markov_blanket"]["nonnegative_fraction"].get<double>(), 0.0);
   EXPECT_EQ(m["figures"].size(), 4u);
 
-  for (const char* png : {"fig1_trajectory.png", "fig2_sparsity.png",
-                          "fig3_logdet_histogram.png", "fig5_network.png"}) {
+  for (const char* png : {"fig1_trajectory.png", "fig2_sparsity.png", "fig3_logdet_histogram.png",
+                          "fig5_network.png"}) {
     const cv::Mat img = cv::imread((root / "out" / png).string(), cv::IMREAD_COLOR);
     ASSERT_FALSE(img.empty()) << png;
     EXPECT_EQ(img.cols, 1000) << png;

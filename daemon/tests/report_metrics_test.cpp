@@ -21,15 +21,16 @@ class RemoveTempDirs : public ::testing::Environment {
  public:
   void TearDown() override {
     std::error_code ignored;
-    fs::remove_all(fs::temp_directory_path() / ("report_metrics_test_" + std::to_string(::getpid())), ignored);
+    fs::remove_all(
+        fs::temp_directory_path() / ("report_metrics_test_" + std::to_string(::getpid())), ignored);
   }
 };
 [[maybe_unused]] ::testing::Environment* const kRemoveTempDirs =
     ::testing::AddGlobalTestEnvironment(new RemoveTempDirs);
 
 fs::path fixture_root(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() /
-                       ("report_metrics_test_" + std::to_string(::getpid())) / name;
+  const fs::path dir =
+      fs::temp_directory_path() / ("report_metrics_test_" + std::to_string(::getpid())) / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
@@ -50,7 +51,11 @@ TEST(CsvTable, NonNumericCellNamesFileLineAndColumn) {
   EXPECT_DOUBLE_EQ(t.number(0, 1), 2.0);
   EXPECT_EQ(error_of([&] { t.number(1, 1); }),
             "traj.csv:5: column 'x_m': 'abc' is not a finite number");
-  EXPECT_EQ(error_of([&] { t.integer(0, t.column("x_m")); t.integer(1, 0); t.number(1, 1); }),
+  EXPECT_EQ(error_of([&] {
+              t.integer(0, t.column("x_m"));
+              t.integer(1, 0);
+              t.number(1, 1);
+            }),
             "traj.csv:5: column 'x_m': 'abc' is not a finite number");
 }
 
@@ -67,8 +72,10 @@ TEST(CsvTable, MissingColumnAndWrongFieldCountAreErrors) {
 
 TEST(Readers, StatesWithoutExactMarginalColumnsIsAnError) {
   const fs::path dir = fixture_root("states");
-  test::write_file(dir / "states.csv", "state_id,frame_id,t_us,x_m,y_m,z_m,roll_rad,pitch_rad,"
-                                       "heading_rad" + test::matrix_header('b') + "\n");
+  test::write_file(dir / "states.csv",
+                   "state_id,frame_id,t_us,x_m,y_m,z_m,roll_rad,pitch_rad,"
+                   "heading_rad" +
+                       test::matrix_header('b') + "\n");
   const std::string e = error_of([&] { read_states(dir / "states.csv"); });
   EXPECT_NE(e.find("states.csv: missing column 'e00'"), std::string::npos) << e;
 }
@@ -181,7 +188,8 @@ TEST(Metrics, NeesOfStatesDrawnFromTheirCovarianceIsNearTheDof) {
   EXPECT_NEAR(r.interval_95.first, 198.98385 / 40, 0.001);  // chi2(240) 2.5 % / 40
   EXPECT_NEAR(r.interval_95.second, 284.80248 / 40, 0.001);
   // Same states against truth.csv interpolated at the state times: the same NEES.
-  const NeesResult by_time = delayed_state_nees(states, {}, read_timed_poses(dir / "dive/truth.csv"));
+  const NeesResult by_time =
+      delayed_state_nees(states, {}, read_timed_poses(dir / "dive/truth.csv"));
   EXPECT_NEAR(by_time.mean, r.mean, 1e-9);
 }
 

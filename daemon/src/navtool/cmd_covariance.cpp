@@ -201,12 +201,12 @@ void run_covariance(const CovarianceArgs& args) {
   out["fig3_histogram"] = histogram_json(check.logdet_ratio_ours,
                                          check.logdet_ratio_markov_blanket, args.histogram_bins);
   if (!args.figure.empty()) {
+    const std::string title = "Fig. 3  log det(bound) - log det(exact) per delayed state: " +
+                              std::filesystem::path(args.file).filename().string();
     try {
       report::write_png(args.figure, report::logdet_histogram_figure(
                                          check.logdet_ratio_ours, check.logdet_ratio_markov_blanket,
-                                         args.histogram_bins,
-                                         "Fig. 3  log det(bound) - log det(exact) per delayed "
-                                         "state: " + std::filesystem::path(args.file).filename().string()));
+                                         args.histogram_bins, title));
     } catch (const report::ReportError& e) {
       throw CommandError(std::string("covariance: --figure: ") + e.what());
     }

@@ -22,11 +22,10 @@ struct ReportArgs {
 void print_summary(const nlohmann::json& m) {
   std::cerr << "report: " << m["figures"].size() << " figures and metrics.json written to "
             << m["inputs"]["replay_dir"].get<std::string>() << "\n";
-  for (const char* key : {"images", "camera_links", "links_proposed", "links_accepted",
-                          "outliers_injected", "outliers_rejected", "dr_xy_rms_m",
-                          "slam_xy_rms_m", "slam_final_xy_error_m", "nees_mean",
-                          "nees_95_interval", "conservative_fraction", "wall_s",
-                          "realtime_factor"}) {
+  for (const char* key :
+       {"images", "camera_links", "links_proposed", "links_accepted", "outliers_injected",
+        "outliers_rejected", "dr_xy_rms_m", "slam_xy_rms_m", "slam_final_xy_error_m", "nees_mean",
+        "nees_95_interval", "conservative_fraction", "wall_s", "realtime_factor"}) {
     std::cerr << "  " << key << ": " << m[key].dump() << "\n";
   }
 }

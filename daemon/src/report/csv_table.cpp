@@ -18,7 +18,8 @@ std::vector<std::string> split_fields(const std::string& line) {
     // Tolerate surrounding blanks (hand-written fixtures, "a, b").
     const size_t first = field.find_first_not_of(" \t");
     const size_t last = field.find_last_not_of(" \t");
-    fields.push_back(first == std::string::npos ? std::string() : field.substr(first, last - first + 1));
+    fields.push_back(first == std::string::npos ? std::string()
+                                                : field.substr(first, last - first + 1));
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
@@ -83,9 +84,7 @@ size_t CsvTable::column(const std::string& column) const {
   throw ReportError(name_ + ": missing column '" + column + "' (header: " + join(header_) + ")");
 }
 
-std::string CsvTable::where(size_t row) const {
-  return name_ + ":" + std::to_string(lines_[row]);
-}
+std::string CsvTable::where(size_t row) const { return name_ + ":" + std::to_string(lines_[row]); }
 
 void CsvTable::bad_cell(size_t row, size_t col, const char* what) const {
   throw ReportError(where(row) + ": column '" + header_[col] + "': '" + cells_[row][col] +

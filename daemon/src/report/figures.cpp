@@ -22,9 +22,7 @@ std::string fmt(const char* format, double v) {
 cv::Point2d map_xy(const core::Vec6& pose) { return {pose[1], pose[0]}; }
 
 /// XY covariance in map coordinates (East, North).
-cv::Matx22d map_cov(const core::Mat6& cov) {
-  return {cov(1, 1), cov(1, 0), cov(0, 1), cov(0, 0)};
-}
+cv::Matx22d map_cov(const core::Mat6& cov) { return {cov(1, 1), cov(1, 0), cov(0, 1), cov(0, 0)}; }
 
 struct Bounds {
   double x_min = INFINITY, x_max = -INFINITY, y_min = INFINITY, y_max = -INFINITY;
@@ -155,7 +153,8 @@ cv::Mat logdet_histogram_figure(const std::vector<double>& ours,
   const double width = (hi - lo) / bins;
   auto count = [&](const std::vector<double>& v) {
     std::vector<int> c(static_cast<size_t>(bins), 0);
-    for (double x : v) ++c[static_cast<size_t>(std::clamp(static_cast<int>((x - lo) / width), 0, bins - 1))];
+    for (double x : v)
+      ++c[static_cast<size_t>(std::clamp(static_cast<int>((x - lo) / width), 0, bins - 1))];
     return c;
   };
   const auto c_ours = count(ours), c_mb = count(markov_blanket);
@@ -242,8 +241,8 @@ cv::Mat network_figure(const std::vector<DelayedState>& states,
     }
     plot.segment(a->second, c->second, colors::kGreen, 1);
   }
-  const size_t stride =
-      std::max<size_t>(1, (states.size() + options.max_ellipses - 1) / std::max(options.max_ellipses, 1));
+  const size_t stride = std::max<size_t>(
+      1, (states.size() + options.max_ellipses - 1) / std::max(options.max_ellipses, 1));
   bool have_initial = false;
   for (size_t k = 0; k < states.size(); k += stride) {
     const auto& s = states[k];

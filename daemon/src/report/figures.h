@@ -24,8 +24,8 @@ cv::Mat trajectory_figure(const std::vector<TimedPose>& dead_reckoning,
 /// Size and fill of the information matrix from its block pattern: every listed block counts
 /// as a dense D x D block, off-diagonal blocks twice (Λ is symmetric; the file lists i <= j).
 struct Sparsity {
-  long long dim = 0;           ///< D * num_blocks
-  long long nonzeros = 0;      ///< D^2 (diagonal blocks + 2 off-diagonal blocks)
+  long long dim = 0;       ///< D * num_blocks
+  long long nonzeros = 0;  ///< D^2 (diagonal blocks + 2 off-diagonal blocks)
   double nonzero_fraction = 0.0;
 };
 Sparsity sparsity_of(const BlockPattern& pattern);

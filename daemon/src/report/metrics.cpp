@@ -102,8 +102,8 @@ NeesResult delayed_state_nees(const std::vector<DelayedState>& states,
     r.nees.push_back(err.dot(llt.solve(err)));
   }
   if (r.nees.empty()) {
-    throw ReportError("NEES: no delayed state has a truth pose (" +
-                      std::to_string(states.size()) + " states)");
+    throw ReportError("NEES: no delayed state has a truth pose (" + std::to_string(states.size()) +
+                      " states)");
   }
   const double n = static_cast<double>(r.nees.size());
   double sum = 0.0;
@@ -202,16 +202,17 @@ json compute_metrics(const ReplayOutput& replay, const DiveData* dive,
           nees.mean >= nees.interval_95.first && nees.mean <= nees.interval_95.second;
     }
   }
-  for (const char* key : {"dr_xy_rms_m", "slam_xy_rms_m", "slam_final_xy_error_m", "nees_mean",
-                          "nees_95_interval"}) {
+  for (const char* key :
+       {"dr_xy_rms_m", "slam_xy_rms_m", "slam_final_xy_error_m", "nees_mean", "nees_95_interval"}) {
     if (!m.contains(key)) m[key] = nullptr;
   }
 
-  const ConservativeResult cons = conservative_bounds(replay.states, options.conservative_tolerance);
+  const ConservativeResult cons =
+      conservative_bounds(replay.states, options.conservative_tolerance);
   m["conservative_fraction"] = cons.checked ? json(cons.fraction()) : json(nullptr);
   m["conservative_checked"] = cons.checked;
-  m["conservative_worst_min_eigenvalue"] = cons.checked ? json(cons.worst_min_eigenvalue)
-                                                        : json(nullptr);
+  m["conservative_worst_min_eigenvalue"] =
+      cons.checked ? json(cons.worst_min_eigenvalue) : json(nullptr);
   m["conservative_tolerance"] = options.conservative_tolerance;
 
   const std::optional<double> wall_s = json_number(replay.summary, "wall_s");

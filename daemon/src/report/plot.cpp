@@ -223,7 +223,8 @@ void Plot::draw_legend(cv::Mat& img) const {
   const double scale = 0.45;
   const int row_h = 20, sample_w = 28;
   int width = 0;
-  for (const auto& e : legend_) width = std::max(width, sample_w + 8 + text_size(e.label, scale).width);
+  for (const auto& e : legend_)
+    width = std::max(width, sample_w + 8 + text_size(e.label, scale).width);
   for (const auto& n : notes_) width = std::max(width, text_size(n, scale).width);
   const int rows = static_cast<int>(legend_.size() + notes_.size());
   const cv::Rect box(area_.br().x - width - 24, area_.y + 8, width + 16, rows * row_h + 10);

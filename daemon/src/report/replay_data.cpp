@@ -120,8 +120,8 @@ std::vector<ProposedLink> read_links(const fs::path& file) {
   const size_t t_col = t.column("t_us"), fi = t.column("frame_i"), fj = t.column("frame_j"),
                si = t.column("state_i"), sj = t.column("state_j"), oc = t.column("outcome"),
                m2 = t.column("mahalanobis_sq"), ol = t.column("is_outlier");
-  static const std::array<std::string, 4> kOutcomes = {"accepted", "gated",
-                                                       "registration_failed", "not_registered"};
+  static const std::array<std::string, 4> kOutcomes = {"accepted", "gated", "registration_failed",
+                                                       "not_registered"};
   std::vector<ProposedLink> out(t.rows());
   for (size_t r = 0; r < t.rows(); ++r) {
     ProposedLink& l = out[r];
@@ -181,9 +181,8 @@ BlockPattern read_block_pattern(const fs::path& file) {
   }
   for (const auto& [i, j] : p.blocks) {
     if (j >= p.num_blocks) {
-      throw ReportError(file.string() + ": block (" + std::to_string(i) + "," +
-                        std::to_string(j) + ") outside num_blocks " +
-                        std::to_string(p.num_blocks));
+      throw ReportError(file.string() + ": block (" + std::to_string(i) + "," + std::to_string(j) +
+                        ") outside num_blocks " + std::to_string(p.num_blocks));
     }
   }
   return p;
@@ -214,8 +213,8 @@ ReplayOutput read_replay_output(const fs::path& dir) {
   if (!fs::is_directory(dir)) throw ReportError(dir.string() + ": not a directory");
   ReplayOutput out;
   out.dir = dir;
-  out.summary = fs::exists(dir / "summary.json") ? read_json(dir / "summary.json")
-                                                  : nlohmann::json::object();
+  out.summary =
+      fs::exists(dir / "summary.json") ? read_json(dir / "summary.json") : nlohmann::json::object();
   out.trajectory = read_timed_poses(dir / "trajectory.csv");
   out.dead_reckoning = read_timed_poses(dir / "dead_reckoning.csv");
   out.states = read_states(dir / "states.csv");

@@ -65,22 +65,22 @@ struct BlockPattern {
 /// The replay output directory. Files marked optional are empty/absent-tolerant.
 struct ReplayOutput {
   std::filesystem::path dir;
-  nlohmann::json summary;                  ///< summary.json ({} when absent)
-  std::vector<TimedPose> trajectory;       ///< trajectory.csv
-  std::vector<TimedPose> dead_reckoning;   ///< dead_reckoning.csv
-  std::vector<DelayedState> states;        ///< states.csv
-  std::vector<ProposedLink> links;         ///< links.csv
-  long long proposal_rows = 0;             ///< proposals.csv rows (optional file)
-  std::optional<BlockPattern> blocks;      ///< information_blocks.csv (optional)
-  std::vector<LogdetRow> logdet;           ///< logdet.csv (optional)
+  nlohmann::json summary;                 ///< summary.json ({} when absent)
+  std::vector<TimedPose> trajectory;      ///< trajectory.csv
+  std::vector<TimedPose> dead_reckoning;  ///< dead_reckoning.csv
+  std::vector<DelayedState> states;       ///< states.csv
+  std::vector<ProposedLink> links;        ///< links.csv
+  long long proposal_rows = 0;            ///< proposals.csv rows (optional file)
+  std::optional<BlockPattern> blocks;     ///< information_blocks.csv (optional)
+  std::vector<LogdetRow> logdet;          ///< logdet.csv (optional)
 };
 
 /// The simulated dive directory (all parts optional except truth.csv).
 struct DiveData {
   std::filesystem::path dir;
-  std::vector<TimedPose> truth;    ///< truth.csv, sorted by t_us
-  std::vector<TrueImage> images;   ///< images.csv (empty when absent)
-  nlohmann::json sim;              ///< sim.json ({} when absent)
+  std::vector<TimedPose> truth;   ///< truth.csv, sorted by t_us
+  std::vector<TrueImage> images;  ///< images.csv (empty when absent)
+  nlohmann::json sim;             ///< sim.json ({} when absent)
 };
 
 /// Reads the replay output directory. trajectory.csv, dead_reckoning.csv, states.csv and

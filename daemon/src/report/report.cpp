@@ -23,7 +23,10 @@ json stats_json(const std::vector<double>& v) {
   if (v.empty()) return nullptr;
   const core::SummaryStats s = core::summarize(v);
   const auto nonneg = std::count_if(v.begin(), v.end(), [](double x) { return x >= 0.0; });
-  return {{"min", s.min}, {"median", s.median}, {"max", s.max}, {"count", s.count},
+  return {{"min", s.min},
+          {"median", s.median},
+          {"max", s.max},
+          {"count", s.count},
           {"nonnegative_fraction", static_cast<double>(nonneg) / static_cast<double>(v.size())}};
 }
 

@@ -13,10 +13,10 @@
 namespace nav::report {
 
 struct ReportOptions {
-  std::filesystem::path out_dir;                 ///< the replay output directory (read + written)
-  std::optional<std::filesystem::path> dive_dir; ///< default: summary.json "dive_dir" if present
-  int histogram_bins = 20;                       ///< Fig. 3
-  NetworkOptions network;                        ///< Fig. 5
+  std::filesystem::path out_dir;                  ///< the replay output directory (read + written)
+  std::optional<std::filesystem::path> dive_dir;  ///< default: summary.json "dive_dir" if present
+  int histogram_bins = 20;                        ///< Fig. 3
+  NetworkOptions network;                         ///< Fig. 5
   MetricsOptions metrics;
 };
 

@@ -9,7 +9,6 @@
 //   links: a fixed list with known counts (kLinks); logdet: known values.
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
-
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -66,21 +65,23 @@ inline std::string matrix_header(char prefix) {
 
 inline std::string pose_row(long long t_us, const Eigen::Vector3d& xyh, double dx, double dy) {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "%lld,%.17g,%.17g,5,0,0,%.17g", t_us, xyh.x() + dx,
-                xyh.y() + dy, xyh.z());
+  std::snprintf(buf, sizeof buf, "%lld,%.17g,%.17g,5,0,0,%.17g", t_us, xyh.x() + dx, xyh.y() + dy,
+                xyh.z());
   return buf;
 }
 
 /// Writes the dive directory: truth.csv, images.csv, sim.json, config.yaml.
 inline void write_dive(const fs::path& dir) {
   fs::create_directories(dir);
-  std::string truth = "t_us,x_m,y_m,z_m,roll_rad,pitch_rad,heading_rad,u_mps,v_mps,w_mps,"
-                      "p_radps,q_radps,r_radps\n";
+  std::string truth =
+      "t_us,x_m,y_m,z_m,roll_rad,pitch_rad,heading_rad,u_mps,v_mps,w_mps,"
+      "p_radps,q_radps,r_radps\n";
   for (int t = 0; t <= kTruthSeconds; ++t) {
     truth += pose_row(kStartUs + 1'000'000LL * t, truth_xyh(t), 0, 0) + ",1,0,0,0,0,0\n";
   }
   write_file(dir / "truth.csv", truth);
-  std::string images = "frame_id,t_us,x_m,y_m,z_m,roll_rad,pitch_rad,heading_rad,altitude_m,camera_on\n";
+  std::string images =
+      "frame_id,t_us,x_m,y_m,z_m,roll_rad,pitch_rad,heading_rad,altitude_m,camera_on\n";
   for (int k = 0; k < kImages; ++k) {
     const int t = k * kImageEverySeconds;
     images += std::to_string(k) + "," + pose_row(kStartUs + 1'000'000LL * t, truth_xyh(t), 0, 0) +
@@ -118,7 +119,8 @@ struct ReplayFixtureOptions {
 /// Writes the replay output directory.
 inline void write_replay(const fs::path& dir, const ReplayFixtureOptions& o = {}) {
   fs::create_directories(dir);
-  std::string head = "t_us,x_m,y_m,z_m,roll_rad,pitch_rad,heading_rad,var_x,var_y,var_z,var_heading\n";
+  std::string head =
+      "t_us,x_m,y_m,z_m,roll_rad,pitch_rad,heading_rad,var_x,var_y,var_z,var_heading\n";
   std::string traj = head, dr = head;
   for (int k = 0; k < kImages; ++k) {
     const int t = k * kImageEverySeconds;
@@ -139,7 +141,8 @@ inline void write_replay(const fs::path& dir, const ReplayFixtureOptions& o = {}
     const Eigen::Matrix<double, 6, 6> e = exact_marginal(k);
     Eigen::Matrix<double, 6, 1> z;
     for (int i = 0; i < 6; ++i) z[i] = n01(rng);
-    const Eigen::Matrix<double, 6, 1> err = Eigen::LLT<Eigen::Matrix<double, 6, 6>>(e).matrixL() * z;
+    const Eigen::Matrix<double, 6, 1> err =
+        Eigen::LLT<Eigen::Matrix<double, 6, 6>>(e).matrixL() * z;
     const Eigen::Vector3d xyh = truth_xyh(t);
     char pose[256];
     std::snprintf(pose, sizeof pose, "%d,%d,%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g", k, k,
@@ -163,7 +166,8 @@ inline void write_replay(const fs::path& dir, const ReplayFixtureOptions& o = {}
   std::string blocks = "# block_dim 6 num_blocks 41\ni,j\n";
   for (int k = 0; k < 41; ++k) blocks += std::to_string(k) + "," + std::to_string(k) + "\n";
   for (int k = 0; k < 40; ++k) blocks += std::to_string(k) + "," + std::to_string(k + 1) + "\n";
-  for (const char* pair : {"0,9", "1,10", "2,20", "5,25", "3,30"}) blocks += std::string(pair) + "\n";
+  for (const char* pair : {"0,9", "1,10", "2,20", "5,25", "3,30"})
+    blocks += std::string(pair) + "\n";
   write_file(dir / "information_blocks.csv", blocks);
   std::string logdet = "state_i,state_j,ours,markov_blanket\n";
   for (int k = 0; k < kImages - 1; ++k) {
