@@ -81,6 +81,7 @@ SensorDecoderCounters DecoderBase::merge(const drivers::DecodeStats& codec) cons
   c.messages = codec.records;
   c.decode_errors =
       codec.checksum_failures + codec.malformed + codec.out_of_range + misrouted_frames_;
+  c.out_of_range = codec.out_of_range;
   c.dropped_bytes = codec.dropped_bytes;
   c.unused += codec.unsupported;
   return c;

@@ -153,6 +153,7 @@ class CanDvlSensorDecoder final : public DecoderBase {
     const drivers::DecodeStats& text = candump_.stats();
     c.bytes = text_bytes_ + frame_bytes_;
     c.decode_errors += text.checksum_failures + text.malformed + text.out_of_range;
+    c.out_of_range += text.out_of_range;
     c.dropped_bytes += text.dropped_bytes;
     c.unused += text.unsupported;
     return c;

@@ -53,6 +53,8 @@ struct SensorDecoderCounters {
   std::uint64_t messages = 0;       ///< protocol records decoded (ensembles, lines, frames)
   std::uint64_t measurements = 0;   ///< measurements emitted
   std::uint64_t decode_errors = 0;  ///< codec checksum failures + malformed + out of range
+  std::uint64_t out_of_range = 0;   ///< of which records with a value outside its range (the
+                                    ///< record is still used; e.g. PD0 leader fields left empty)
   std::uint64_t dropped_bytes = 0;  ///< bytes the codec discarded (resync, bad records)
   std::uint64_t invalid = 0;  ///< records without a usable value: invalid bottom track, no echo,
                               ///< sensor status invalid, depth conversion rejected
