@@ -26,47 +26,66 @@ bool same_bits(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
          std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.size())) == 0;
 }
 
-/// The simulated survey driving a filter and its bounds the way navd does: predict (bounds
-/// follow with F, Q; a kept state gets the robot's bound), unary updates, camera links (the
-/// bound of the older image is tightened), recovery of the mean after each image.
+/// The simulated survey driving a filter, its state recovery and its bounds the way navd does:
+/// predict (the recovery's warm start and the bounds follow with F, Q; a kept state gets the
+/// robot's bound), unary updates, camera links; at each image a fixed-iteration PCG recovery
+/// (the filter takes its mean, the bounds its Σ_rr and residual) and, for every link, the
+/// Algorithm 1 update of the older image's bound.
+StateRecoveryOptions recovery_options() {
+  StateRecoveryOptions o;
+  o.iterations_per_step = 30;  // enough for a good linearisation point on these small maps
+  return o;
+}
+
 struct MapRun {
-  explicit MapRun(const sim::Survey& s) : survey(&s), filter(12), bounds(12) {
+  explicit MapRun(const sim::Survey& s)
+      : survey(&s), filter(12), bounds(12), recovery(12, recovery_options()) {
     EXPECT_TRUE(filter.initialize(s.x0_mean, s.P0).ok());
     EXPECT_TRUE(bounds.initialize_robot(s.P0).ok());
+    EXPECT_TRUE(recovery.initialize(s.x0_mean, s.P0).ok());
   }
 
   void step(size_t k) {
     const sim::SurveyStep& st = survey->steps[k];
     Mat12 F, Q;
-    (void)sim::predicted_mean(*survey, st, filter.mean_block(Esdf::kRobotBlock), &F, &Q);
+    const Vec12 f = sim::predicted_mean(*survey, st, filter.mean_block(Esdf::kRobotBlock), &F, &Q);
+    const int blocks_before = filter.num_blocks();
     ASSERT_TRUE(sim::apply_step(*survey, st, filter, image_blocks).ok());
-    const int kept = st.image >= 0 ? image_blocks.back() : -1;
-    ASSERT_TRUE(bounds.predict_robot(F, Q, st.image >= 0, kept).ok());
-    if (st.image < 0) return;
-    ASSERT_TRUE(filter.recover_mean_direct().ok());
-    // A stand-in recovery (Σ^_rr = half the robot bound, a small residual): deterministic,
-    // and it exercises the certificate, epochs and snapshot bounds.
-    ASSERT_TRUE(bounds.set_recovery(0.5 * bounds.robot_bound(), 1e-4, filter.num_blocks()).ok());
+    const bool keep = st.image >= 0;
+    const int kept = keep ? image_blocks.back() : -1;
+    ASSERT_TRUE(bounds.predict_robot(F, Q, keep, kept).ok());
+    ASSERT_TRUE(recovery.extend_for_prediction(F, Q, f, keep, keep ? blocks_before : -1).ok());
+    if (!keep) return;
+    const RecoveryResult r = recovery.solve(filter.information(), filter.information_vector());
+    ASSERT_TRUE(r.status.ok()) << r.status.to_string();
+    ASSERT_TRUE(filter.set_mean(recovery.mean()).ok());
+    ASSERT_TRUE(bounds
+                    .set_recovery(recovery.robot_covariance(), r.column_residual_frobenius,
+                                  filter.num_blocks())
+                    .ok());
     for (const sim::CameraLink& link : st.links) {
       const int a = image_blocks[static_cast<size_t>(link.image_a)];
       const int b = image_blocks[static_cast<size_t>(link.image_b)];
       MeasJac Ha, Hb;
       survey->camera.predict(filter.mean_block(a), filter.mean_block(b), &Ha, &Hb);
       LinkProposal p;
-      ASSERT_TRUE(bounds.propose(a, Eigen::MatrixXd::Zero(12, 12), &p).ok());
-      ASSERT_TRUE(bounds.update(p, Hb, Ha, survey->R_camera).ok());
+      ASSERT_TRUE(bounds.propose(a, recovery.cross_covariance(a), &p).ok());
+      const Status s = bounds.update(p, Hb, Ha, survey->R_camera);
+      ASSERT_TRUE(s.ok() || s.code() == StatusCode::kNotPositiveDefinite) << s.to_string();
     }
   }
 
   Bytes encode() const {
     SectionWriter w;
     EXPECT_TRUE(add_map_sections(filter, &bounds, &w).ok());
+    EXPECT_TRUE(add_recovery_section(recovery, &w).ok());
     return w.finish();
   }
 
   const sim::Survey* survey;
   Esdf filter;
   CovarianceBounds bounds;
+  StateRecovery recovery;
   std::vector<int> image_blocks;
 };
 
@@ -192,9 +211,14 @@ TEST(MapCodec, RoundTripIsBitIdentical) {
   EXPECT_TRUE(same_bits(b->robot_bound(), run.bounds.robot_bound()));
   EXPECT_EQ(b->certificate_lambda(), run.bounds.certificate_lambda());
   EXPECT_EQ(b->lambda_max_sigma_bound(), run.bounds.lambda_max_sigma_bound());
-  // Re-encoding the restored map gives the same bytes.
+  // Re-encoding the restored map and warm start gives the same bytes.
+  SectionSet set;
+  ASSERT_TRUE(SectionSet::decode(payload, &set).ok());
+  StateRecovery recovery(12);
+  ASSERT_TRUE(restore_recovery(set, f->num_blocks(), &recovery).ok());
   SectionWriter w;
   ASSERT_TRUE(add_map_sections(*f, &*b, &w).ok());
+  ASSERT_TRUE(add_recovery_section(recovery, &w).ok());
   EXPECT_EQ(w.finish(), payload);
 }
 
@@ -212,6 +236,9 @@ TEST(MapCodec, RestoredFilterContinuesBitIdentically) {
     ASSERT_TRUE(restore(checkpoint, &f, &b).ok());
     resumed.filter = std::move(*f);
     resumed.bounds = std::move(*b);
+    SectionSet set;
+    ASSERT_TRUE(SectionSet::decode(checkpoint, &set).ok());
+    ASSERT_TRUE(restore_recovery(set, resumed.filter.num_blocks(), &resumed.recovery).ok());
     resumed.image_blocks = original.image_blocks;  // the daemon keeps this in its own section
 
     for (size_t k = cut; k < n; ++k) {
@@ -220,6 +247,7 @@ TEST(MapCodec, RestoredFilterContinuesBitIdentically) {
     }
     EXPECT_EQ(resumed.encode(), original.encode()) << "cut at step " << cut;
     EXPECT_TRUE(same_bits(resumed.filter.mean(), original.filter.mean()));
+    EXPECT_TRUE(same_bits(resumed.recovery.solution(), original.recovery.solution()));
   }
 }
 
@@ -352,6 +380,29 @@ TEST(MapCodec, ErrorsSayWhatAndWhere) {
       << s.message();
   EXPECT_FALSE(f.has_value());
   EXPECT_FALSE(b.has_value());
+}
+
+TEST(MapCodec, RecoveryWarmStartMustFitTheFilter) {
+  const sim::Survey survey = small_survey(3);
+  MapRun run(survey);
+  for (size_t k = 0; k < survey.steps.size(); ++k) ASSERT_NO_FATAL_FAILURE(run.step(k));
+  SectionWriter w;
+  ASSERT_TRUE(add_recovery_section(run.recovery, &w).ok());
+  const Bytes bytes = w.finish();
+  SectionSet set;
+  ASSERT_TRUE(SectionSet::decode(bytes, &set).ok());
+  StateRecovery other(12);
+  ASSERT_TRUE(other.initialize(survey.x0_mean, survey.P0).ok());
+  const Eigen::MatrixXd before = other.solution();
+  const int n = run.filter.num_blocks();
+  const Status s = restore_recovery(set, n + 1, &other);
+  EXPECT_NE(s.message().find("RCVY section: warm start is " + std::to_string(12 * n) +
+                             "x13, expected " + std::to_string(12 * (n + 1)) + "x13"),
+            std::string::npos)
+      << s.message();
+  EXPECT_TRUE(same_bits(other.solution(), before));  // unchanged on error
+  ASSERT_TRUE(restore_recovery(set, n, &other).ok());
+  EXPECT_TRUE(same_bits(other.solution(), run.recovery.solution()));
 }
 
 TEST(Crc32, CheckValue) {

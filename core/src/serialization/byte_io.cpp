@@ -119,6 +119,7 @@ Status ByteReader::matrix(Eigen::MatrixXd* m, Eigen::Index rows, Eigen::Index co
                              std::to_string(cols) + (allow_empty ? " or 0x0" : "") +
                              " at offset " + std::to_string(at));
   }
+  if (Status s = need(8 * static_cast<std::size_t>(r) * c, field); !s.ok()) return s;
   Eigen::MatrixXd out(r, c);
   if (Status s = values(&out, field); !s.ok()) return s;
   *m = std::move(out);

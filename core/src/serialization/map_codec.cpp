@@ -320,4 +320,31 @@ Status restore_map(const SectionSet& sections, std::optional<Esdf>* filter,
   return Status::Ok();
 }
 
+Status add_recovery_section(const StateRecovery& recovery, SectionWriter* writer) {
+  ByteWriter w;
+  w.u32(static_cast<std::uint32_t>(recovery.block_dim()));
+  w.matrix(recovery.solution());
+  return writer->add(kRecoverySectionTag, kRecoverySectionVersion, w.data());
+}
+
+Status restore_recovery(const SectionSet& sections, int num_blocks, StateRecovery* recovery) {
+  const SectionView* v = nullptr;
+  if (Status s = sections.require(kRecoverySectionTag, kRecoverySectionVersion, &v); !s.ok()) {
+    return s;
+  }
+  ByteReader r(v->bytes, "RCVY section", v->offset);
+  const int d = recovery->block_dim();
+  std::uint32_t dim = 0;
+  if (Status s = r.u32(&dim, "block_dim"); !s.ok()) return s;
+  if (dim != static_cast<std::uint32_t>(d)) {
+    return r.error("block_dim " + std::to_string(dim) + ", the recovery has " + std::to_string(d));
+  }
+  Eigen::MatrixXd X;
+  if (Status s = r.matrix(&X, Eigen::Index{num_blocks} * d, d + 1, false, "warm start"); !s.ok()) {
+    return s;
+  }
+  if (Status s = r.expect_end(); !s.ok()) return s;
+  return recovery->set_solution(X);
+}
+
 }  // namespace nav::core

@@ -54,10 +54,13 @@ std::vector<std::uint8_t> SectionWriter::finish() const {
   w.u32(kSectionContainerVersion);
   w.u32(static_cast<std::uint32_t>(sections_.size()));
   for (const Entry& e : sections_) {
+    const std::size_t header_at = w.data().size();
     w.u32(e.tag);
     w.u32(e.version);
     w.u64(e.bytes.size());
-    w.u32(crc32(e.bytes));
+    const std::uint32_t crc =
+        crc32_update(crc32(std::span(w.data()).subspan(header_at, 16)), e.bytes);
+    w.u32(crc);
     w.bytes(e.bytes);
   }
   return w.take();
@@ -102,7 +105,8 @@ Status SectionSet::decode(std::span<const std::uint8_t> bytes, SectionSet* out,
     if (Status s = r.raw(&v.bytes, static_cast<std::size_t>(length), "section bytes"); !s.ok()) {
       return s;
     }
-    if (options.verify_crc && crc32(v.bytes) != crc) {
+    if (options.verify_crc &&
+        crc32_update(crc32(bytes.subspan(header_at, 16)), v.bytes) != crc) {
       return bad("CRC-32 mismatch in section " + section_tag_name(v.tag), header_at);
     }
     set.sections_.push_back(v);

@@ -15,6 +15,9 @@
 //   f64 certificate L, f64 running Σ λmax, i64 epoch, u32 m,
 //   m x { u32 state, matrix bound (d x d), f64 λmax, matrix snapshot bound (d x d, or 0 x 0 when
 //         never snapshotted), f64 snapshot λmax, i64 snapshot epoch }   (states ascending)
+// Section "RCVY", version 1: the state recovery's warm start [μ | Σ_{*r}] (the only state a
+//   StateRecovery carries between solves; its preconditioner is refactored every solve):
+//   u32 d, matrix (n*d) x (1 + d).
 // (matrix = u32 rows, u32 cols, values; values = doubles column-major, little-endian.)
 //
 // Decoding checks every size against the bytes present before allocating, every index range,
@@ -25,6 +28,7 @@
 
 #include "nav/core/filter/esdf.h"
 #include "nav/core/recovery/bounds.h"
+#include "nav/core/recovery/state_recovery.h"
 #include "nav/core/serialization/sections.h"
 #include "nav/core/status.h"
 
@@ -39,6 +43,8 @@ inline constexpr std::uint32_t kEsdfSectionTag = section_tag("ESDF");
 inline constexpr std::uint32_t kEsdfSectionVersion = 1;
 inline constexpr std::uint32_t kBoundsSectionTag = section_tag("BNDS");
 inline constexpr std::uint32_t kBoundsSectionVersion = 1;
+inline constexpr std::uint32_t kRecoverySectionTag = section_tag("RCVY");
+inline constexpr std::uint32_t kRecoverySectionVersion = 1;
 
 /// The "ESDF" section's bytes.
 std::vector<std::uint8_t> encode_esdf(const Esdf& filter);
@@ -60,5 +66,11 @@ Status add_map_sections(const Esdf& filter, const CovarianceBounds* bounds, Sect
 /// (1 <= state < num_blocks). Both outputs are written only when everything decoded.
 Status restore_map(const SectionSet& sections, std::optional<Esdf>* filter,
                    std::optional<CovarianceBounds>* bounds);
+
+/// Adds the "RCVY" section (the warm start of `recovery`).
+Status add_recovery_section(const StateRecovery& recovery, SectionWriter* writer);
+/// Sets recovery's warm start from the "RCVY" section; it must have `num_blocks` blocks of the
+/// recovery's block_dim. On error `recovery` is unchanged.
+Status restore_recovery(const SectionSet& sections, int num_blocks, StateRecovery* recovery);
 
 }  // namespace nav::core

@@ -8,7 +8,9 @@
 //   offset 0   magic "NAVSECTS" (8 bytes)
 //          8   u32 container version (kSectionContainerVersion)
 //         12   u32 number of sections N
-//         16   N x { u32 tag, u32 section version, u64 length, u32 CRC-32 of the bytes, bytes }
+//         16   N x { u32 tag, u32 section version, u64 length, u32 CRC-32, bytes }
+//              (the CRC covers the tag, version and length fields and the bytes, so a flipped
+//              tag of an optional section is caught as well)
 // Nothing may follow the last section. Tags are four ASCII characters read as a little-endian
 // u32 (section_tag("ESDF")), unique within a container.
 //
