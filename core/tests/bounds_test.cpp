@@ -35,6 +35,20 @@ TEST(CovarianceBounds, ScalarKalmanUpdateByHand) {
   EXPECT_NEAR(bounds.bound(1)(0, 0), 2.0, 1e-15);
 }
 
+TEST(CovarianceBounds, RobotUpdateIsTheKalmanUpdateOfTheBound) {
+  // 2-dim robot, prior bound diag(4, 1), measurement of x0 with variance 1: the posterior
+  // variance of x0 is 4 - 16/5 = 0.8, x1 unchanged (uncorrelated).
+  CovarianceBounds bounds(2);
+  ASSERT_TRUE(bounds.initialize_robot(Eigen::Vector2d(4.0, 1.0).asDiagonal().toDenseMatrix()).ok());
+  Eigen::MatrixXd H(1, 2);
+  H << 1.0, 0.0;
+  ASSERT_TRUE(bounds.update_robot(H, Eigen::MatrixXd::Identity(1, 1)).ok());
+  EXPECT_NEAR(bounds.robot_bound()(0, 0), 0.8, 1e-12);
+  EXPECT_NEAR(bounds.robot_bound()(1, 1), 1.0, 1e-12);
+  EXPECT_NEAR(bounds.robot_bound()(0, 1), 0.0, 1e-12);
+  EXPECT_FALSE(bounds.update_robot(Eigen::MatrixXd::Identity(1, 3), Eigen::MatrixXd::Identity(1, 1)).ok());
+}
+
 TEST(CovarianceBounds, CertifiedInflationFollowsTheResidual) {
   CovarianceBounds bounds(2);
   ASSERT_TRUE(bounds.initialize_robot(Eigen::Matrix2d::Identity() * 4.0).ok());

@@ -348,6 +348,18 @@ Status Esdf::set_mean(const Eigen::VectorXd& mean) {
   return Status::Ok();
 }
 
+Status Esdf::set_mean_block(int block, const Eigen::Ref<const Eigen::VectorXd>& mean) {
+  const char* where = "Esdf::set_mean_block";
+  if (Status s = check_block(block, where); !s.ok()) return s;
+  if (mean.size() != block_dim()) {
+    return invalid(where, "block mean has " + std::to_string(mean.size()) + " elements, blocks have " +
+                              std::to_string(block_dim()));
+  }
+  if (!mean.allFinite()) return invalid(where, "block mean is not finite");
+  mean_.mutable_segment(block) = mean;
+  return Status::Ok();
+}
+
 Status Esdf::recover_mean_direct() {
   const char* where = "Esdf::recover_mean_direct";
   if (!initialized()) {

@@ -189,6 +189,21 @@ Status CovarianceBounds::propose(int state, const Eigen::MatrixXd& sigma_ir,
   return Status::Ok();
 }
 
+Status CovarianceBounds::update_robot(const Eigen::MatrixXd& H, const Eigen::MatrixXd& R) {
+  if (H.cols() != block_dim_ || R.rows() != H.rows() || R.cols() != H.rows()) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "CovarianceBounds::update_robot: H must be m x " +
+                             std::to_string(block_dim_) + " and R m x m");
+  }
+  Eigen::MatrixXd posterior;
+  if (!joseph(robot_bound_, H, R, &posterior)) {
+    return Status::Error(StatusCode::kNotPositiveDefinite,
+                         "CovarianceBounds::update_robot: innovation covariance not SPD");
+  }
+  set_robot_bound(posterior);
+  return Status::Ok();
+}
+
 bool CovarianceBounds::joseph(const Eigen::MatrixXd& joint, const Eigen::MatrixXd& H,
                               const Eigen::MatrixXd& R, Eigen::MatrixXd* posterior) {
   if (!finite(joint)) return false;

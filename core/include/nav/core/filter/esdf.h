@@ -96,6 +96,9 @@ class Esdf {
 
   /// Replaces the linearisation point (e.g. from the CG recovery); size and finiteness checked.
   Status set_mean(const Eigen::VectorXd& mean);
+  /// Replaces the linearisation point of one block (O(block_dim), e.g. the robot's O(1)
+  /// relinearisation); size and finiteness checked.
+  Status set_mean_block(int block, const Eigen::Ref<const Eigen::VectorXd>& mean);
   /// Solves Λ μ = η by sparse Cholesky (CHOLMOD supernodal) and sets the mean.
   Status recover_mean_direct();
 

@@ -91,6 +91,14 @@ class CovarianceBounds {
   Status predict_robot(const Eigen::MatrixXd& F, const Eigen::MatrixXd& Q, bool keep_current,
                        int kept_state);
 
+  /// A measurement of the robot alone, z = h(x_r) + v, v ~ N(0, R), linearised with H (m x d):
+  /// Joseph-form Kalman update of the robot bound. The filter's robot marginal after a unary
+  /// update is exactly the Kalman update of its prior marginal, and the update is monotone in the
+  /// prior, so B_rr >= Σ_rr still holds afterwards. Keeps B_rr (and with it every new state's
+  /// bound and L) from growing like an unaided prediction between recoveries. O(d³).
+  /// kNotPositiveDefinite (bound unchanged) if H B Hᵀ + R is not SPD.
+  Status update_robot(const Eigen::MatrixXd& H, const Eigen::MatrixXd& R);
+
   /// Inserts delayed state i with the robot's current bound (an augmentation without prediction).
   Status insert(int state);
 

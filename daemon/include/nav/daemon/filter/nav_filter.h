@@ -1,0 +1,204 @@
+#pragma once
+// NavFilter: the view-based SLAM filter on measurements (Eustice et al., "Visually Navigating
+// the RMS Titanic with SLAM Information Filters", RSS 2005), shared by navd and `navtool
+// replay`. Owns the ESDF (core::Esdf, 12-element blocks), the state recovery (fixed-iteration
+// PCG, core::StateRecovery) and the Algorithm 1 bounds (core::CovarianceBounds).
+//
+// Measurements must arrive in time-of-validity order (TimeOrderingBuffer's job); an older one
+// is counted (`out_of_order`) and skipped.
+// * Initialisation (hil-tests/README.md "World frame"): at the first time both a roll/pitch, a
+//   heading and a depth have been seen: x = y = 0 (sigma initial_xy_sigma_m), z from the depth
+//   minus the sensor's lever arm, attitude from the attitude sensor, velocities and rates 0
+//   with loose priors. Earlier measurements are counted (`before_initialisation`).
+// * Predict: constant-velocity model (filter.process_noise_psd) to each measurement's time, in
+//   steps of at most max_predict_step_s. Updates: DVL, roll/pitch, heading, depth with the
+//   config mounts and noise (sensor_models.h). Altitude sets the camera footprint size (no
+//   seabed model); angular rates are counted and not used.
+// * Every robot update is applied to the robot bound as well (a Kalman update of B_rr, still an
+//   upper bound of Σ_rr), so the bound stored for each new delayed state stays tight.
+// * Before each prediction the robot is relinearised in O(1): μ_r = Λ_rr⁻¹(η_r − Σ_j Λ_rj μ_j)
+//   over its few neighbours (its conditional mean given the delayed states).
+// * ImageEvent at t: predict to t; recover (the warm start is extended once across
+//   everything since the last recovery: the robot's own predictions and updates compose into
+//   Σ'_ir = Σ_ir Aᵀ and a 12 x 12 Kalman filter of Σ_rr, which is exact for an exact previous
+//   recovery except for the link updates; O(1) per measurement, O(map) once per image), then `recovery.iterations_per_step` PCG
+//   iterations on the current Λ, η; the delayed states take the recovered mean); hand the
+//   recovery to the bounds (certified, bounds.h); then, if links are enabled, propose links
+//   from the robot (= this image) to every earlier delayed state i (test below), look each
+//   proposed pair up in the RegistrationTable and gate it; accepted links update the ESDF
+//   (CameraRelativePoseModel with the camera mount, robot <-> i) and tighten Σ~_ii (bounds
+//   update, constant time). The robot is kept as this image's delayed state by the next
+//   prediction (Esdf::predict keep_current), with its links; finish() keeps a pending one.
+// * Proposal test: with Δ = p_i − p_r (world x, y) and its covariance C from the certified
+//   proposal joint [Σ_rr Σ_ri; Σ_ir Σ~_ii], the pair is proposed when the confidence ellipse
+//   Δᵀ C⁻¹ Δ <= chi2(2 dof, proposal_confidence) can reach within D of the origin, tested as
+//     ‖Δ‖ − sqrt(chi2 · λmax(C)) < D,   D = r_i + r_j + 2 ‖lever_xy‖,
+//   r = altitude · footprint half-diagonal per metre (the images' footprints can touch).
+// * Gate: d² = νᵀ (H J Hᵀ + R)⁻¹ ν with ν = z − h(μ_i, μ_r) (angles wrapped), H = [H_r H_i]
+//   and J = [Σ^_rr Σ^_ri; Σ^_ir Σ~_ii]: the proposal joint WITHOUT the truncation inflation
+//   ε I of bounds.h (that isotropic term, in m² and rad² alike, is tens of degrees on the
+//   rotation rows after a few PCG iterations and would let any outlier through; proposal keeps
+//   it so that no pair is missed). Accepted when d² <= camera_gate_chi2 (5 dof; derived from the
+//   config's 6-dof filter.gating_chi2_threshold at the same probability, chi_square.h).
+//
+// Work per measurement is O(1) in the map size; per image O(map) (recovery, one proposal test
+// per delayed state), as in the paper. Not thread-safe (one owner thread).
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "nav/core/filter/esdf.h"
+#include "nav/core/models/constant_velocity.h"
+#include "nav/core/recovery/bounds.h"
+#include "nav/core/recovery/state_recovery.h"
+#include "nav/core/status.h"
+#include "nav/daemon/config.h"
+#include "nav/daemon/filter/sensor_models.h"
+#include "nav/daemon/measurement.h"
+#include "nav/daemon/registration_table.h"
+
+namespace nav::daemon {
+
+struct NavFilterOptions {
+  bool propose_links = true;               ///< false: dead reckoning (no camera links)
+  double initial_xy_sigma_m = 0.01;        ///< prior sigma of x, y (the world origin)
+  double initial_velocity_sigma_mps = 0.5;  ///< prior sigma of u, v, w
+  double initial_rate_sigma_radps = 0.05;  ///< prior sigma of p, q, r
+  double max_predict_step_s = 0.5;         ///< longer gaps are predicted in steps, > 0
+  double default_altitude_m = 3.0;         ///< footprint altitude before any altitude, > 0
+  double proposal_confidence = 0.99;       ///< of the proposal ellipse, in (0, 1)
+  double camera_gate_chi2 = 15.086;        ///< 5-dof gate (from_config derives it)
+  core::StateRecoveryOptions recovery;     ///< fixed iterations (from_config)
+  core::BoundsOptions bounds;              ///< certified (default)
+
+  /// Options for `config`: recovery.iterations_per_step = filter.cg_iterations_per_step,
+  /// camera_gate_chi2 = the 5-dof equivalent of filter.gating_chi2_threshold.
+  static NavFilterOptions from_config(const NavdConfig& config);
+};
+
+enum class LinkOutcome { kAccepted, kGated, kRegistrationFailed, kNotRegistered };
+const char* to_string(LinkOutcome outcome);
+
+struct LinkRecord {  ///< one proposed pair (links.csv)
+  std::int64_t t_us = 0;
+  std::uint64_t frame_i = 0, frame_j = 0;  ///< earlier, later (the current image)
+  int state_i = -1, state_j = -1;          ///< filter blocks (state_j once kept, else -1)
+  LinkOutcome outcome = LinkOutcome::kNotRegistered;
+  double mahalanobis_sq = -1.0;  ///< gate statistic (-1 when not registered / failed)
+  bool is_outlier = false;       ///< registration's simulator truth
+};
+
+struct ProposalRecord {  ///< one image (proposals.csv)
+  std::uint64_t frame_id = 0;
+  int candidates = 0, proposed = 0, accepted = 0;
+};
+
+struct ImageRecord {  ///< the estimate at one image (trajectory.csv)
+  std::int64_t t_us = 0;
+  std::uint64_t frame_id = 0;
+  int state = -1;                ///< its delayed-state block once kept
+  double altitude_m = 0.0;       ///< used for its footprint
+  core::Vec12 robot_mean = core::Vec12::Zero();            ///< after this image's links
+  core::Mat12 robot_covariance = core::Mat12::Zero();      ///< recovered Σ_rr (before links)
+  double relative_residual = 0.0;  ///< recovery's max relative residual
+};
+
+struct NavFilterCounters {
+  std::uint64_t measurements = 0, before_initialisation = 0, out_of_order = 0;
+  std::uint64_t updates = 0, update_failures = 0, unused = 0;
+  std::uint64_t predictions = 0, images = 0, duplicate_images = 0;
+  std::uint64_t recoveries = 0, recovery_failures = 0;
+  std::uint64_t candidates = 0, links_proposed = 0, links_accepted = 0, links_gated = 0;
+  std::uint64_t registration_failed = 0, not_registered = 0;
+  std::uint64_t outliers_rejected = 0, outliers_accepted = 0, bound_update_failures = 0;
+  double max_cg_relative_residual = 0.0;
+};
+
+class NavFilter {
+ public:
+  /// `registrations` may be null (then every proposal is not_registered); it must outlive the
+  /// filter. Throws std::invalid_argument for invalid options or camera calibration.
+  NavFilter(const NavdConfig& config, const RegistrationTable* registrations,
+            NavFilterOptions options);
+
+  /// Processes one measurement (time-ordered). Returns an error only when the filter itself
+  /// fails (prediction or recovery breakdown); a rejected measurement is counted instead.
+  core::Status process(const Measurement& m);
+  /// End of data: keeps a pending image as a delayed state (a short prediction).
+  core::Status finish();
+
+  bool initialised() const { return initialised_; }
+  std::int64_t time_us() const { return time_us_; }
+  const core::Esdf& esdf() const { return filter_; }
+  const core::CovarianceBounds& bounds() const { return bounds_; }
+  const core::StateRecovery& recovery() const { return recovery_; }
+  const NavFilterOptions& options() const { return options_; }
+  const NavFilterCounters& counters() const { return counters_; }
+  const std::vector<ImageRecord>& images() const { return images_; }
+  const std::vector<LinkRecord>& links() const { return links_; }
+  const std::vector<ProposalRecord>& proposals() const { return proposals_; }
+  /// Image record of delayed-state block `block`, or nullptr (robot / unknown).
+  const ImageRecord* image_of_state(int block) const;
+
+ private:
+  struct Proposal {
+    core::LinkProposal joint;
+    std::size_t image = 0;  ///< index into images_
+  };
+  core::Status try_initialise(const Measurement& m);
+  core::Status initialise(std::int64_t t_us);
+  core::Status advance_to(std::int64_t t_us);
+  core::Status predict_once(double dt_s);
+  void relinearise_robot();
+  void update_robot(const Measurement& m);
+  /// ESDF update of the robot and the same Kalman update of the robot bound
+  /// (CovarianceBounds::update_robot), counted.
+  void track_robot_update(const core::MeasJac& H, const core::MeasCov& R);
+  template <class Model>
+  void update_unary(const Model& model, const core::MeasVec& z, const core::MeasCov& R,
+                    const char* what, std::size_t sensor);
+  core::Status on_image(const ImageEvent& image);
+  bool recover();
+  void propose_and_link(ImageRecord& current);
+  bool is_candidate(const ImageRecord& earlier, const ImageRecord& current, int block,
+                    core::LinkProposal* joint) const;
+  LinkRecord try_link(const Proposal& p, const ImageRecord& current);
+  double footprint_radius_m(double altitude_m) const;
+
+  NavFilterOptions options_;
+  SensorModels sensors_;
+  const RegistrationTable* registrations_;
+  core::ConstantVelocityModel process_;
+  core::Esdf filter_{12};
+  core::StateRecovery recovery_;
+  core::CovarianceBounds bounds_;
+  bool initialised_ = false;
+  std::int64_t time_us_ = 0;
+  // Seen before initialisation.
+  std::optional<BodyAttitude> init_roll_pitch_, init_heading_;
+  std::optional<Depth> init_depth_;
+  std::size_t init_rp_sensor_ = 0, init_heading_sensor_ = 0;
+  // Since the last recovery (warm-start extension, see recover()): the linear map A with
+  // Σ'_ir = Σ_ir Aᵀ (predictions F and robot updates I − K H composed) and the robot covariance
+  // P tracked by a 12 x 12 Kalman filter from the recovered Σ_tt.
+  core::Mat12 A_since_recovery_ = core::Mat12::Identity();
+  core::Mat12 P_robot_ = core::Mat12::Zero();
+  core::Mat12 sigma_tt_ = core::Mat12::Zero();
+  bool predicted_since_recovery_ = false;
+  int kept_since_recovery_ = -1;
+  // The image whose delayed state the next prediction keeps (index into images_), or -1.
+  long pending_image_ = -1;
+  std::vector<std::size_t> pending_links_;  ///< links_ rows waiting for state_j
+  double altitude_m_;
+  double proposal_chi2_;
+  std::vector<long> image_of_block_;  ///< block -> images_ index (-1: robot / none)
+  std::vector<ImageRecord> images_;
+  std::vector<LinkRecord> links_;
+  std::vector<ProposalRecord> proposals_;
+  std::vector<Proposal> scratch_proposals_;
+  NavFilterCounters counters_;
+};
+
+}  // namespace nav::daemon

@@ -1,0 +1,150 @@
+// NavFilter link proposal from the Algorithm 1 bounds, registration look-up, 5-dof gating and
+// link updates (the test and gate are stated in nav_filter.h).
+#include <spdlog/spdlog.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <cmath>
+
+#include "nav/core/geometry/rotation.h"
+#include "nav/daemon/filter/nav_filter.h"
+
+namespace nav::daemon {
+namespace {
+
+constexpr int kD = 12;  // block dimension
+
+/// Covariance of Δ = p_i − p_r (world x, y) from the joint [Σ_rr Σ_ri; Σ_ir Σ~_ii] (24 x 24).
+Eigen::Matrix2d horizontal_offset_covariance(const Eigen::MatrixXd& joint) {
+  const Eigen::Matrix2d rr = joint.block<2, 2>(0, 0);
+  const Eigen::Matrix2d ii = joint.block<2, 2>(kD, kD);
+  const Eigen::Matrix2d ir = joint.block<2, 2>(kD, 0);
+  return rr + ii - ir - ir.transpose();
+}
+
+/// The joint without the truncation inflation: [Σ^_rr Σ^_ri; Σ^_ir Σ~_ii] (nav_filter.h "Gate").
+Eigen::MatrixXd gate_joint(const core::LinkProposal& p) {
+  Eigen::MatrixXd joint = p.joint;
+  joint.topLeftCorner(kD, kD).diagonal().array() -= p.epsilon_robot + p.epsilon_state;
+  joint.bottomRightCorner(kD, kD).diagonal().array() -= p.epsilon_state;
+  return joint;
+}
+
+}  // namespace
+
+double NavFilter::footprint_radius_m(double altitude_m) const {
+  return altitude_m * sensors_.footprint_radius_per_altitude();
+}
+
+bool NavFilter::is_candidate(const ImageRecord& earlier, const ImageRecord& current, int block,
+                             core::LinkProposal* joint) const {
+  if (!bounds_.propose(block, recovery_.cross_covariance(block), joint).ok()) return false;
+  const Eigen::Vector2d delta = filter_.mean_block(block).head<2>() -
+                                filter_.mean_block(core::Esdf::kRobotBlock).head<2>();
+  const Eigen::Matrix2d C = horizontal_offset_covariance(joint->joint);
+  const double lambda_max = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
+                                C, Eigen::EigenvaluesOnly)
+                                .eigenvalues()(1);
+  const core::Vec6& camera = sensors_.camera()->x_body_camera;
+  const double reach_m = footprint_radius_m(earlier.altitude_m) +
+                         footprint_radius_m(current.altitude_m) + 2.0 * camera.head<2>().norm();
+  return delta.norm() - std::sqrt(proposal_chi2_ * std::max(lambda_max, 0.0)) < reach_m;
+}
+
+void NavFilter::propose_and_link(ImageRecord& current) {
+  ProposalRecord summary;
+  summary.frame_id = current.frame_id;
+  scratch_proposals_.clear();
+  for (int block = 1; block < filter_.num_blocks(); ++block) {
+    const long index = image_of_block_[static_cast<std::size_t>(block)];
+    if (index < 0) continue;
+    ++summary.candidates;
+    Proposal p;
+    p.image = static_cast<std::size_t>(index);
+    if (is_candidate(images_[p.image], current, block, &p.joint)) {
+      scratch_proposals_.push_back(std::move(p));
+    }
+  }
+  summary.proposed = static_cast<int>(scratch_proposals_.size());
+  for (const Proposal& p : scratch_proposals_) {
+    LinkRecord link = try_link(p, current);
+    if (link.outcome == LinkOutcome::kAccepted) ++summary.accepted;
+    pending_links_.push_back(links_.size());
+    links_.push_back(link);
+  }
+  counters_.candidates += static_cast<std::uint64_t>(summary.candidates);
+  counters_.links_proposed += static_cast<std::uint64_t>(summary.proposed);
+  proposals_.push_back(summary);
+}
+
+LinkRecord NavFilter::try_link(const Proposal& p, const ImageRecord& current) {
+  const ImageRecord& earlier = images_[p.image];
+  const int block = p.joint.state;
+  LinkRecord link;
+  link.t_us = current.t_us;
+  link.frame_i = earlier.frame_id;
+  link.frame_j = current.frame_id;
+  link.state_i = block;
+  const std::optional<RegistrationResult> reg =
+      registrations_ ? registrations_->find(static_cast<std::int64_t>(earlier.frame_id),
+                                            static_cast<std::int64_t>(current.frame_id))
+                     : std::nullopt;
+  if (!reg) {
+    link.outcome = LinkOutcome::kNotRegistered;
+    ++counters_.not_registered;
+    return link;
+  }
+  link.is_outlier = reg->is_outlier;
+  if (!reg->success) {
+    link.outcome = LinkOutcome::kRegistrationFailed;
+    ++counters_.registration_failed;
+    return link;
+  }
+  // Gate (nav_filter.h): ν = z − h(μ_i, μ_r), S = H J Hᵀ + R with H = [H_r H_i].
+  const core::CameraRelativePoseModel& camera = *sensors_.camera();
+  const auto& x_i = filter_.mean_block(block);
+  const auto& x_r = filter_.mean_block(core::Esdf::kRobotBlock);
+  link.outcome = LinkOutcome::kGated;
+  core::MeasJac H_i, H_r;
+  core::MeasVec nu;
+  if (!camera.baseline_is_degenerate(x_i, x_r)) {
+    try {
+      nu = reg->z - camera.predict(x_i, x_r, &H_i, &H_r);
+      for (int row = 0; row < 5; ++row) nu(row) = core::wrap_angle(nu(row));
+      Eigen::Matrix<double, 5, 2 * kD> H;
+      H << H_r, H_i;
+      const Eigen::Matrix<double, 5, 5> S = H * gate_joint(p.joint) * H.transpose() + reg->covariance;
+      const Eigen::LDLT<Eigen::Matrix<double, 5, 5>> ldlt(S);
+      const Eigen::Matrix<double, 5, 1> v = nu;
+      link.mahalanobis_sq = v.dot(ldlt.solve(v));
+      if (ldlt.info() == Eigen::Success && std::isfinite(link.mahalanobis_sq) &&
+          link.mahalanobis_sq <= options_.camera_gate_chi2) {
+        link.outcome = LinkOutcome::kAccepted;
+      }
+    } catch (const std::exception& e) {
+      spdlog::warn("NavFilter: camera model for frames {}-{}: {}", link.frame_i, link.frame_j,
+                   e.what());
+    }
+  }
+  if (link.outcome == LinkOutcome::kAccepted) {
+    const core::MeasCov R = reg->covariance;
+    const core::MeasVec z = reg->z;
+    if (core::Status s = filter_.update(camera, block, core::Esdf::kRobotBlock, z, R); !s.ok()) {
+      spdlog::warn("NavFilter: camera link {}-{} rejected by the filter: {}", link.frame_i,
+                   link.frame_j, s.to_string());
+      link.outcome = LinkOutcome::kGated;
+    } else if (!bounds_.update(p.joint, H_r, H_i, R).ok()) {
+      ++counters_.bound_update_failures;
+    }
+  }
+  if (link.outcome == LinkOutcome::kAccepted) {
+    ++counters_.links_accepted;
+    if (link.is_outlier) ++counters_.outliers_accepted;
+  } else {
+    ++counters_.links_gated;
+    if (link.is_outlier) ++counters_.outliers_rejected;
+  }
+  return link;
+}
+
+}  // namespace nav::daemon
