@@ -79,8 +79,9 @@ TEST(NavFilter, TracksTruthWithinItsCovarianceAndClosesTheLoop) {
     if (l.outcome == LinkOutcome::kAccepted && l.frame_j - l.frame_i > 30) ++loop_closures;
   }
   EXPECT_GT(loop_closures, 5);
-  // Every successful registration of a proposed pair is accepted (no outliers in this dive).
-  EXPECT_EQ(c.links_gated, 0u);
+  // No outliers in this dive: a 99 % gate rejects about 1 % of the good links.
+  EXPECT_LE(static_cast<double>(c.links_gated), 0.02 * static_cast<double>(c.links_accepted) + 1.0)
+      << c.links_gated << " gated, " << c.links_accepted << " accepted";
   EXPECT_GT(c.registration_failed, 0u);
   EXPECT_LT(c.links_proposed, c.candidates);
 
