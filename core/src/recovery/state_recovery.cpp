@@ -26,6 +26,14 @@ const char* to_string(RecoveryMode mode) {
   return "unknown";
 }
 
+const char* to_string(RecoveryKernel kernel) {
+  switch (kernel) {
+    case RecoveryKernel::kPacked: return "packed";
+    case RecoveryKernel::kGeneric: return "generic";
+  }
+  return "unknown";
+}
+
 Status StateRecoveryOptions::validate() const {
   if (iterations_per_step < 0) {
     return Status::Error(StatusCode::kInvalidArgument,
@@ -178,10 +186,7 @@ void StateRecovery::finish(RecoveryResult& result, const Eigen::VectorXd& residu
       std::max(result.mean_relative_residual, result.column_relative_residual);
 }
 
-RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Eigen::VectorXd& eta) {
-  RecoveryResult result;
-  result.mode = options_.mode;
-  fill_rhs(eta);
+PcgOptions StateRecovery::pcg_options() const {
   PcgOptions pcg;
   if (options_.mode == RecoveryMode::kFixedIterations) {
     pcg.max_iterations = options_.iterations_per_step;
@@ -190,13 +195,10 @@ RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Eigen::Vect
     pcg.max_iterations = options_.max_iterations;
     pcg.relative_tolerance = options_.relative_tolerance;
   }
-  const PcgSummary summary =
-      solve_pcg(A, preconditioner_, rhs_, solution_, pcg, workspace_);
-  result.status = summary.status;
-  result.iterations = summary.iterations;
-  if (summary.residual_norm.size() == rhs_.cols()) {
-    finish(result, summary.residual_norm, rhs_.colwise().norm().transpose());
-  }
+  return pcg;
+}
+
+void StateRecovery::check_convergence(RecoveryResult& result, const PcgSummary& summary) const {
   if (result.status.ok() && options_.mode == RecoveryMode::kTolerance && !summary.converged) {
     result.status = Status::Error(
         StatusCode::kNumericalFailure,
@@ -205,6 +207,53 @@ RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Eigen::Vect
             std::to_string(summary.iterations) + " iterations (reached " +
             std::to_string(summary.max_relative_residual) + ")");
   }
+}
+
+RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Eigen::VectorXd& eta) {
+  RecoveryResult result;
+  result.mode = options_.mode;
+  result.refactored_blocks = preconditioner_.num_blocks();
+  fill_rhs(eta);
+  const PcgSummary summary =
+      solve_pcg(A, preconditioner_, rhs_, solution_, pcg_options(), workspace_);
+  result.status = summary.status;
+  result.iterations = summary.iterations;
+  if (summary.residual_norm.size() == rhs_.cols()) {
+    finish(result, summary.residual_norm, rhs_.colwise().norm().transpose());
+  }
+  check_convergence(result, summary);
+  return result;
+}
+
+RecoveryResult StateRecovery::solve_packed(const InformationMatrix& lambda,
+                                           const Eigen::VectorXd& eta) {
+  RecoveryResult result;
+  result.mode = options_.mode;
+  result.status = packed_preconditioner_.update(lambda);
+  if (!result.status.ok()) return result;
+  result.refactored_blocks = packed_preconditioner_.last_refactored();
+  packed_operator_.refresh(lambda);
+  const int d = block_dim_;
+  const int columns = 1 + d;
+  const int width = packed_width(columns);
+  const Eigen::Index n = solution_.rows();
+  // B = [η | E_r] packed: η in column 0, the identity in the robot rows (block 0).
+  packed_rhs_.assign(static_cast<size_t>(n * width), 0.0);
+  for (Eigen::Index i = 0; i < n; ++i) packed_rhs_[static_cast<size_t>(i * width)] = eta[i];
+  for (int r = 0; r < d; ++r) packed_rhs_[static_cast<size_t>(r * width + 1 + r)] = 1.0;
+  pack_columns(solution_, width, &packed_solution_);
+  const PcgSummary summary =
+      solve_pcg_packed(packed_operator_, packed_preconditioner_, packed_rhs_.data(),
+                       packed_solution_.data(), columns, width, pcg_options(), packed_workspace_);
+  unpack_columns(packed_solution_, width, solution_);
+  result.status = summary.status;
+  result.iterations = summary.iterations;
+  if (summary.residual_norm.size() == columns) {
+    Eigen::VectorXd rhs_norm = Eigen::VectorXd::Ones(columns);
+    rhs_norm[0] = eta.norm();
+    finish(result, summary.residual_norm, rhs_norm);
+  }
+  check_convergence(result, summary);
   return result;
 }
 
@@ -254,6 +303,7 @@ RecoveryResult StateRecovery::solve(const InformationMatrix& lambda, const Eigen
   result.status = check_snapshot(lambda.dim(), eta.size());
   if (!result.status.ok()) return result;
   if (options_.mode == RecoveryMode::kDirect) return solve_direct(lambda.to_sparse(), eta);
+  if (options_.kernel == RecoveryKernel::kPacked) return solve_packed(lambda, eta);
   result.status = preconditioner_.factor(lambda);
   if (!result.status.ok()) return result;
   return solve_with(InformationOperator(lambda), eta);

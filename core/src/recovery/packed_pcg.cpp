@@ -1,0 +1,380 @@
+// Packed multi-RHS PCG on the filter's block matrix (see recovery/packed_pcg.h).
+#include "nav/core/recovery/packed_pcg.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstring>
+#include <string>
+
+namespace nav::core {
+namespace {
+
+// 8 doubles: one AVX-512 register (two AVX2, four SSE2 registers in the other clones).
+typedef double v8d __attribute__((vector_size(64)));
+constexpr int kLanes = 8;
+
+// Each hot loop is compiled three times and the best one for the CPU is chosen at load time
+// (GNU ifunc). The project builds for baseline x86-64, so without this the kernels would be
+// limited to SSE2.
+#define NAV_PACKED_KERNEL \
+  __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+
+// Unaligned, aliasing access to 8 doubles. Macros, not functions: returning a vector type by
+// value from a function compiled for the baseline ISA would change the ABI (-Wpsabi).
+typedef double v8d_unaligned __attribute__((vector_size(64), aligned(8), may_alias));
+#define NAV_LOAD(p) (*reinterpret_cast<const v8d_unaligned*>(p))
+#define NAV_STORE(p, v) (*reinterpret_cast<v8d_unaligned*>(p) = (v))
+
+/// Y_i = Σ_k A_{i,col[k]} X_{col[k]} for every block row i (tile kernel, see the header),
+/// optionally dots += Σ_rows X ∘ Y. D = 0: block size d at run time.
+template <int D>
+[[gnu::always_inline]] inline void multiply_rows(int d_runtime, const int* row_start,
+                                                 const int* col, const double* const* data,
+                                                 int rows, const double* X, double* Y, int width,
+                                                 double* dots) {
+  const int d = D > 0 ? D : d_runtime;
+  constexpr int kMax = D > 0 ? D : InformationMatrix::kMaxBlockDim;
+  const std::ptrdiff_t row_stride = std::ptrdiff_t{d} * width;
+  for (int i = 0; i < rows; ++i) {
+    for (int ch = 0; ch < width; ch += kLanes) {
+      v8d acc[kMax];
+      for (int r = 0; r < d; ++r) acc[r] = v8d{};
+      for (int k = row_start[i]; k < row_start[i + 1]; ++k) {
+        const double* a = data[k];
+        const double* x = X + col[k] * row_stride + ch;
+        for (int q = 0; q < d; ++q) {
+          const v8d xq = NAV_LOAD(x + std::ptrdiff_t{q} * width);
+          for (int r = 0; r < d; ++r) acc[r] += a[q * d + r] * xq;
+        }
+      }
+      double* y = Y + i * row_stride + ch;
+      for (int r = 0; r < d; ++r) NAV_STORE(y + std::ptrdiff_t{r} * width, acc[r]);
+      if (dots != nullptr) {
+        const double* xi = X + i * row_stride + ch;
+        v8d s = NAV_LOAD(dots + ch);
+        for (int r = 0; r < d; ++r) s += NAV_LOAD(xi + std::ptrdiff_t{r} * width) * acc[r];
+        NAV_STORE(dots + ch, s);
+      }
+    }
+  }
+}
+
+NAV_PACKED_KERNEL
+void multiply_kernel(int d, const int* row_start, const int* col, const double* const* data,
+                     int rows, const double* X, double* Y, int width, double* dots) {
+  switch (d) {
+    case 6:
+      return multiply_rows<6>(d, row_start, col, data, rows, X, Y, width, dots);
+    case 12:
+      return multiply_rows<12>(d, row_start, col, data, rows, X, Y, width, dots);
+    default:
+      return multiply_rows<0>(d, row_start, col, data, rows, X, Y, width, dots);
+  }
+}
+
+/// Z_i = Minv_i R_i for every block (inverses stored contiguously), dots += Σ R ∘ Z.
+template <int D>
+[[gnu::always_inline]] inline void block_diagonal_rows(int d_runtime, const double* inverse,
+                                                       int rows, const double* R, double* Z,
+                                                       int width, double* dots) {
+  const int d = D > 0 ? D : d_runtime;
+  constexpr int kMax = D > 0 ? D : InformationMatrix::kMaxBlockDim;
+  const std::ptrdiff_t row_stride = std::ptrdiff_t{d} * width;
+  for (int i = 0; i < rows; ++i) {
+    const double* a = inverse + std::ptrdiff_t{i} * d * d;
+    const double* r_i = R + i * row_stride;
+    double* z_i = Z + i * row_stride;
+    for (int ch = 0; ch < width; ch += kLanes) {
+      v8d acc[kMax];
+      for (int r = 0; r < d; ++r) acc[r] = v8d{};
+      for (int q = 0; q < d; ++q) {
+        const v8d rq = NAV_LOAD(r_i + std::ptrdiff_t{q} * width + ch);
+        for (int r = 0; r < d; ++r) acc[r] += a[q * d + r] * rq;
+      }
+      for (int r = 0; r < d; ++r) NAV_STORE(z_i + std::ptrdiff_t{r} * width + ch, acc[r]);
+      if (dots != nullptr) {
+        v8d s = NAV_LOAD(dots + ch);
+        for (int r = 0; r < d; ++r) s += NAV_LOAD(r_i + std::ptrdiff_t{r} * width + ch) * acc[r];
+        NAV_STORE(dots + ch, s);
+      }
+    }
+  }
+}
+
+NAV_PACKED_KERNEL
+void block_diagonal_kernel(int d, const double* inverse, int rows, const double* R, double* Z,
+                           int width, double* dots) {
+  switch (d) {
+    case 6:
+      return block_diagonal_rows<6>(d, inverse, rows, R, Z, width, dots);
+    case 12:
+      return block_diagonal_rows<12>(d, inverse, rows, R, Z, width, dots);
+    default:
+      return block_diagonal_rows<0>(d, inverse, rows, R, Z, width, dots);
+  }
+}
+
+/// dots[c] = Σ_rows A ∘ B (rows x width packed).
+NAV_PACKED_KERNEL
+void column_dots(const double* A, const double* B, std::ptrdiff_t rows, int width, double* dots) {
+  for (int ch = 0; ch < width; ch += kLanes) {
+    v8d s{};
+    for (std::ptrdiff_t i = 0; i < rows; ++i) {
+      s += NAV_LOAD(A + i * width + ch) * NAV_LOAD(B + i * width + ch);
+    }
+    NAV_STORE(dots + ch, s);
+  }
+}
+
+/// R = B - Q.
+NAV_PACKED_KERNEL
+void subtract(const double* B, const double* Q, double* R, std::ptrdiff_t size) {
+  for (std::ptrdiff_t k = 0; k < size; ++k) R[k] = B[k] - Q[k];
+}
+
+/// X += α ∘ P, R -= α ∘ Q (α per packed column), rr = Σ_rows R ∘ R.
+NAV_PACKED_KERNEL
+void step_x_r(double* X, double* R, const double* P, const double* Q, const double* alpha,
+              std::ptrdiff_t rows, int width, double* rr) {
+  for (int ch = 0; ch < width; ch += kLanes) {
+    const v8d a = NAV_LOAD(alpha + ch);
+    v8d s{};
+    for (std::ptrdiff_t i = 0; i < rows; ++i) {
+      const std::ptrdiff_t k = i * width + ch;
+      NAV_STORE(X + k, NAV_LOAD(X + k) + a * NAV_LOAD(P + k));
+      const v8d r = NAV_LOAD(R + k) - a * NAV_LOAD(Q + k);
+      NAV_STORE(R + k, r);
+      s += r * r;
+    }
+    NAV_STORE(rr + ch, s);
+  }
+}
+
+/// P = Z + β ∘ P.
+NAV_PACKED_KERNEL
+void update_direction(double* P, const double* Z, const double* beta, std::ptrdiff_t rows,
+                      int width) {
+  for (int ch = 0; ch < width; ch += kLanes) {
+    const v8d b = NAV_LOAD(beta + ch);
+    for (std::ptrdiff_t i = 0; i < rows; ++i) {
+      const std::ptrdiff_t k = i * width + ch;
+      NAV_STORE(P + k, NAV_LOAD(Z + k) + b * NAV_LOAD(P + k));
+    }
+  }
+}
+
+double* scratch(std::vector<double>& v, std::ptrdiff_t size) {
+  if (static_cast<std::ptrdiff_t>(v.size()) < size) v.resize(static_cast<size_t>(size));
+  return v.data();
+}
+
+double relative(double residual, double rhs) { return rhs > 0.0 ? residual / rhs : residual; }
+
+}  // namespace
+
+int packed_width(int columns) { return (std::max(columns, 1) + kLanes - 1) / kLanes * kLanes; }
+
+void pack_columns(const Eigen::Ref<const Eigen::MatrixXd>& M, int width,
+                  std::vector<double>* packed) {
+  const Eigen::Index n = M.rows();
+  packed->assign(static_cast<size_t>(n * width), 0.0);
+  double* out = packed->data();
+  for (Eigen::Index c = 0; c < M.cols(); ++c) {
+    const double* in = M.col(c).data();
+    for (Eigen::Index i = 0; i < n; ++i) out[i * width + c] = in[i];
+  }
+}
+
+void unpack_columns(const std::vector<double>& packed, int width, Eigen::Ref<Eigen::MatrixXd> M) {
+  const Eigen::Index n = M.rows();
+  const double* in = packed.data();
+  for (Eigen::Index c = 0; c < M.cols(); ++c) {
+    double* out = M.col(c).data();
+    for (Eigen::Index i = 0; i < n; ++i) out[i] = in[i * width + c];
+  }
+}
+
+void PackedBlockOperator::refresh(const InformationMatrix& lambda) {
+  block_dim_ = lambda.block_dim();
+  const int blocks = lambda.num_blocks();
+  row_start_.resize(static_cast<size_t>(blocks) + 1);
+  col_.clear();
+  data_.clear();
+  row_start_[0] = 0;
+  for (int i = 0; i < blocks; ++i) {
+    col_.push_back(i);
+    data_.push_back(lambda.diagonal_block(i).data());
+    const int neighbours = lambda.num_neighbours(i);
+    for (int k = 0; k < neighbours; ++k) {
+      col_.push_back(lambda.neighbour(i, k));
+      data_.push_back(lambda.neighbour_block(i, k).data());
+    }
+    row_start_[static_cast<size_t>(i) + 1] = static_cast<int>(col_.size());
+  }
+}
+
+void PackedBlockOperator::multiply(const double* X, double* Y, int width,
+                                   double* column_dots) const {
+  if (column_dots != nullptr) std::fill(column_dots, column_dots + width, 0.0);
+  multiply_kernel(block_dim_, row_start_.data(), col_.data(), data_.data(), num_blocks(), X, Y,
+                  width, column_dots);
+}
+
+void PackedBlockJacobi::reset() {
+  num_blocks_ = 0;
+  diagonal_.clear();
+  inverse_.clear();
+}
+
+Status PackedBlockJacobi::update(const InformationMatrix& lambda) {
+  const int d = lambda.block_dim();
+  if (d != block_dim_) {
+    reset();
+    block_dim_ = d;
+  }
+  const size_t dd = static_cast<size_t>(d) * static_cast<size_t>(d);
+  const int blocks = lambda.num_blocks();
+  const int cached = std::min(num_blocks_, blocks);
+  diagonal_.resize(static_cast<size_t>(blocks) * dd);
+  inverse_.resize(static_cast<size_t>(blocks) * dd);
+  last_refactored_ = 0;
+  for (int b = 0; b < blocks; ++b) {
+    const double* values = lambda.diagonal_block(b).data();
+    double* cache = diagonal_.data() + static_cast<size_t>(b) * dd;
+    if (b < cached && std::memcmp(values, cache, dd * sizeof(double)) == 0) continue;
+    std::memcpy(cache, values, dd * sizeof(double));
+    const Eigen::Map<const Eigen::MatrixXd> block(values, d, d);
+    const Eigen::LLT<Eigen::MatrixXd> llt(0.5 * (block + block.transpose()));
+    if (llt.info() != Eigen::Success) {
+      reset();
+      return Status::Error(StatusCode::kNotPositiveDefinite,
+                           "block-Jacobi preconditioner: diagonal block " + std::to_string(b) +
+                               " of the information matrix is not positive definite");
+    }
+    Eigen::Map<Eigen::MatrixXd>(inverse_.data() + static_cast<size_t>(b) * dd, d, d) =
+        llt.solve(Eigen::MatrixXd::Identity(d, d));
+    ++last_refactored_;
+  }
+  num_blocks_ = blocks;
+  return Status::Ok();
+}
+
+void PackedBlockJacobi::apply(const double* R, double* Z, int width, double* column_dots) const {
+  if (column_dots != nullptr) std::fill(column_dots, column_dots + width, 0.0);
+  block_diagonal_kernel(block_dim_, inverse_.data(), num_blocks_, R, Z, width, column_dots);
+}
+
+PcgSummary solve_pcg_packed(const PackedBlockOperator& A, const PackedBlockJacobi& M,
+                            const double* B, double* X, int columns, int width,
+                            const PcgOptions& options, PackedPcgWorkspace& workspace) {
+  PcgSummary summary;
+  summary.status = options.validate();
+  if (!summary.status.ok()) return summary;
+  const Eigen::Index n = A.dim();
+  if (M.num_blocks() != A.num_blocks() || M.block_dim() != A.block_dim() || columns < 1 ||
+      width != packed_width(columns)) {
+    summary.status = Status::Error(
+        StatusCode::kInvalidArgument,
+        "solve_pcg_packed: operator " + std::to_string(n) + " (" + std::to_string(A.num_blocks()) +
+            " blocks), preconditioner " + std::to_string(M.num_blocks()) + " blocks, " +
+            std::to_string(columns) + " columns packed in " + std::to_string(width));
+    return summary;
+  }
+  const std::ptrdiff_t size = n * width;
+  double* R = scratch(workspace.R, size);
+  double* Z = scratch(workspace.Z, size);
+  double* P = scratch(workspace.P, size);
+  double* Q = scratch(workspace.Q, size);
+  const auto w = static_cast<size_t>(width);
+  std::vector<double> xq(w), bx(w), bb(w), rz(w), rz_new(w), rr(w), pq(w), alpha(w, 0.0),
+      beta(w, 0.0);
+  std::vector<bool> active(w, false);
+
+  // R = B - A X (warm start); restart columns whose warm start is worse than zero (pcg.h).
+  A.multiply(X, Q, width, xq.data());
+  column_dots(B, X, n, width, bx.data());
+  column_dots(B, B, n, width, bb.data());
+  subtract(B, Q, R, size);
+  for (int c = 0; c < columns; ++c) {
+    if (options.restart_worse_than_zero && xq[c] - 2.0 * bx[c] > 0.0) {
+      for (Eigen::Index i = 0; i < n; ++i) {
+        X[i * width + c] = 0.0;
+        R[i * width + c] = B[i * width + c];
+      }
+      ++summary.restarted_columns;
+    }
+  }
+  M.apply(R, Z, width, rz.data());
+  std::copy(Z, Z + size, P);
+  column_dots(R, R, n, width, rr.data());
+  auto column_done = [&](int c) {
+    return options.relative_tolerance > 0.0 &&
+           std::sqrt(rr[c]) <= options.relative_tolerance * std::sqrt(bb[c]);
+  };
+  int active_count = 0;
+  for (int c = 0; c < columns; ++c) {
+    active[c] = !column_done(c);
+    active_count += active[c] ? 1 : 0;
+  }
+
+  int iteration = 0;
+  for (; iteration < options.max_iterations && active_count > 0; ++iteration) {
+    A.multiply(P, Q, width, pq.data());
+    for (int c = 0; c < width; ++c) {
+      alpha[c] = 0.0;
+      if (!active[c]) continue;
+      if (!(pq[c] > 0.0)) {
+        // Breakdown: either the column is already exact (p = 0) or A is not SPD.
+        double pp = 0.0;
+        for (Eigen::Index i = 0; i < n; ++i) pp += P[i * width + c] * P[i * width + c];
+        if (pp > 0.0 && summary.status.ok()) {
+          summary.status =
+              Status::Error(StatusCode::kNumericalFailure,
+                            "solve_pcg_packed: p^T A p = " + std::to_string(pq[c]) +
+                                " <= 0 in column " + std::to_string(c) + " at iteration " +
+                                std::to_string(iteration) + " (operator not positive definite?)");
+        }
+        active[c] = false;
+        --active_count;
+        continue;
+      }
+      alpha[c] = rz[c] / pq[c];
+    }
+    step_x_r(X, R, P, Q, alpha.data(), n, width, rr.data());
+    for (int c = 0; c < columns; ++c) {
+      if (active[c] && column_done(c)) {
+        active[c] = false;
+        --active_count;
+      }
+    }
+    M.apply(R, Z, width, rz_new.data());
+    for (int c = 0; c < width; ++c) {
+      beta[c] = 0.0;
+      if (!active[c]) continue;
+      beta[c] = rz[c] > 0.0 ? rz_new[c] / rz[c] : 0.0;
+      rz[c] = rz_new[c];
+    }
+    update_direction(P, Z, beta.data(), n, width);
+  }
+  summary.iterations = iteration;
+
+  if (options.recompute_true_residual) {
+    A.multiply(X, Q, width);
+    subtract(B, Q, R, size);
+    column_dots(R, R, n, width, rr.data());
+  }
+  summary.residual_norm.resize(columns);
+  summary.relative_residual.resize(columns);
+  for (int c = 0; c < columns; ++c) {
+    summary.residual_norm[c] = std::sqrt(rr[c]);
+    summary.relative_residual[c] = relative(summary.residual_norm[c], std::sqrt(bb[c]));
+  }
+  summary.max_relative_residual = summary.relative_residual.maxCoeff();
+  summary.converged = options.relative_tolerance > 0.0 &&
+                      summary.max_relative_residual <= options.relative_tolerance;
+  return summary;
+}
+
+}  // namespace nav::core
