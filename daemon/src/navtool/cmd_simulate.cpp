@@ -26,6 +26,7 @@ struct SimulateArgs {
   int images = 866;
   double outlier_rate = 0.05;
   bool json = false;
+  bool render_images = false;
 };
 
 void draw_progress(double fraction) {
@@ -44,6 +45,7 @@ void run_simulate(const SimulateArgs& args) {
   o.seed = args.seed;
   o.mission.images = args.images;
   o.oracle.outlier_rate = args.outlier_rate;
+  o.render_images = args.render_images;
   if (::isatty(STDERR_FILENO)) o.progress = draw_progress;
   const auto start = std::chrono::steady_clock::now();
   sim::SimSummary s;
@@ -85,6 +87,9 @@ void add_simulate(CLI::App& app) {
   cmd->add_option("--outlier-rate", args->outlier_rate,
                   "fraction of successful registrations that are outliers (default 0.05)")
       ->check(CLI::Range(0.0, 1.0));
+  cmd->add_flag("--render-images", args->render_images,
+                "also render each frame (12-bit grey, strobe-lit height field) to "
+                "DIR/images/<frame %06d>.png with a thumbnail in NAV_IMAGE (~0.3 s per frame)");
   cmd->add_flag("--json", args->json, "print sim.json's content on stdout");
   cmd->callback([args] { run_simulate(*args); });
 }

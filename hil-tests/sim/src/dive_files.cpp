@@ -47,7 +47,8 @@ void DiveFiles::truth(std::int64_t t_us, const core::Vec12& x) {
 }
 
 void DiveFiles::image(std::int64_t frame_id, std::int64_t t_us, std::int64_t host_us,
-                      const core::Vec12& x, double altitude_m, const CameraGeometry& camera) {
+                      const core::Vec12& x, double altitude_m, const CameraGeometry& camera,
+                      const Pixels* pixels) {
   std::fprintf(images_.get(), "%lld,%lld,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.4f,1\n",
                static_cast<long long>(frame_id), static_cast<long long>(t_us), x[0], x[1], x[2],
                x[3], x[4], x[5], altitude_m);
@@ -65,6 +66,15 @@ void DiveFiles::image(std::int64_t frame_id, std::int64_t t_us, std::int64_t hos
   m.thumbnail_width = 0;
   m.thumbnail_height = 0;
   m.thumbnail_num_bytes = 0;
+  if (pixels) {
+    m.file_path = pixels->file_path;
+    m.gain_db = pixels->gain_db;
+    const cv::Mat& t = pixels->thumbnail;
+    m.thumbnail_width = t.cols;
+    m.thumbnail_height = t.rows;
+    m.thumbnail.assign(t.datastart, t.dataend);
+    m.thumbnail_num_bytes = static_cast<std::int32_t>(m.thumbnail.size());
+  }
   image_events_.push_back({host_us, std::move(m)});
 }
 

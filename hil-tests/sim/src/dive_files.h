@@ -13,6 +13,7 @@
 #include <navlcm/image_metadata_t.hpp>
 #include <navlcm/registration_t.hpp>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
 
 #include "nav/core/geometry/types.h"
 #include "nav/sim/oracle.h"
@@ -28,8 +29,14 @@ class DiveFiles {
 
   void truth(std::int64_t t_us, const core::Vec12& x);
   std::vector<RawEvent>& raw_events() { return raw_; }
+  /// A rendered frame's PNG path (relative to the dive directory), 8-bit thumbnail and gain.
+  struct Pixels {
+    std::string file_path;
+    cv::Mat thumbnail;
+    double gain_db = 0.0;
+  };
   void image(std::int64_t frame_id, std::int64_t t_us, std::int64_t host_us, const core::Vec12& x,
-             double altitude_m, const CameraGeometry& camera);
+             double altitude_m, const CameraGeometry& camera, const Pixels* pixels = nullptr);
   /// A registration available at host time host_us (after its image's NAV_IMAGE).
   void registration(std::int64_t host_us, navlcm::registration_t registration);
   /// Writes dive.lcmlog (all events ordered by host time, ties in creation order); returns the

@@ -13,6 +13,9 @@
 #include "nav/core/geometry/rotation.h"
 #include "nav/daemon/dive_log.h"
 #include "nav/sim/geometry2d.h"
+#include "nav/sim/renderer.h"
+
+#include <opencv2/imgcodecs.hpp>
 #include "dive_files.h"
 
 namespace nav::sim {
@@ -99,8 +102,6 @@ nlohmann::json SimSummary::to_json() const {
 
 SimSummary simulate_dive(const SimOptions& o, const daemon::NavdConfig& config,
                          const std::string& config_yaml) {
-  if (o.render_images)
-    throw std::invalid_argument("simulator: render_images is not implemented yet");
   if (!(o.tick_hz >= 10.0 && o.tick_hz <= 1000.0) || std::fmod(1e6 / o.tick_hz, 1.0) != 0.0 ||
       50000 % static_cast<std::int64_t>(1e6 / o.tick_hz) != 0)
     throw std::invalid_argument("SimOptions.tick_hz: " + std::to_string(o.tick_hz) +
@@ -117,10 +118,12 @@ SimSummary simulate_dive(const SimOptions& o, const daemon::NavdConfig& config,
   const daemon::SensorConfig& camera_cfg = camera_sensor(config);
   const CameraGeometry camera = CameraGeometry::from_config(camera_cfg);
   RegistrationOracle oracle(camera, o.oracle, derive_seed(o.seed, 2));
+  const Renderer renderer(camera, seafloor, o.render, derive_seed(o.seed, 5));
 
   fs::create_directories(o.out_dir);
   const fs::path dir(o.out_dir);
   DiveFiles files(dir, config_yaml);
+  if (o.render_images) fs::create_directories(dir / "images");
 
   Guidance guidance(mission);
   const double z0 = seafloor.safe_depth_m(0.0, 0.0) - o.mission.altitude_m;
@@ -170,7 +173,19 @@ SimSummary simulate_dive(const SimOptions& o, const daemon::NavdConfig& config,
       const double latency_us = camera_cfg.latency_s * 1e6 +
           std::uniform_real_distribution<double>(0.0, o.sensor_errors.jitter_ms * 1e3)(camera_rng);
       const std::int64_t host_us = t_us + std::llround(latency_us);
-      files.image(frame, t_us, host_us, x, altitude, camera);
+      if (o.render_images) {
+        DiveFiles::Pixels px;
+        char name[32];
+        std::snprintf(name, sizeof name, "images/%06lld.png", static_cast<long long>(frame));
+        px.file_path = name;
+        const cv::Mat pixels = renderer.render(x, static_cast<std::uint64_t>(frame), &px.gain_db);
+        if (!cv::imwrite((dir / name).string(), pixels))
+          throw std::runtime_error((dir / name).string() + ": cannot write the PNG");
+        px.thumbnail = renderer.thumbnail(pixels);
+        files.image(frame, t_us, host_us, x, altitude, camera, &px);
+      } else {
+        files.image(frame, t_us, host_us, x, altitude, camera);
+      }
       OracleImage img{frame, t_us, x, {}};
       const core::Vec6 x_wc = core::head_to_tail(x.head<6>(), camera.x_body_camera);
       img.footprint = image_footprint(camera, x, seafloor.depth_m(x_wc[0], x_wc[1]));

@@ -14,6 +14,7 @@
 #include "nav/daemon/config.h"
 #include "nav/sim/mission.h"
 #include "nav/sim/oracle.h"
+#include "nav/sim/renderer.h"
 #include "nav/sim/seafloor.h"
 #include "nav/sim/sensor_streams.h"
 #include "nav/sim/vehicle.h"
@@ -29,7 +30,8 @@ struct SimOptions {
   SeafloorOptions seafloor;
   SensorErrorOptions sensor_errors;
   OracleOptions oracle;           ///< oracle.outlier_rate: --outlier-rate
-  bool render_images = false;     ///< not implemented yet: true throws std::invalid_argument
+  bool render_images = false;     ///< write images/<frame %06d>.png (renderer.h), thumbnails
+  RenderOptions render;
   /// Called now and then with the fraction of the dive simulated, in [0, 1].
   std::function<void(double)> progress;
 };

@@ -1,0 +1,51 @@
+#pragma once
+// Renders the simulated camera's 12-bit grey frames from the seafloor height field
+// (`navtool simulate --render-images`): per pixel, the ray of the pinhole camera (config
+// intrinsics, no distortion, config mount) meets the height field (fixed-point iteration on
+// the bilinear surface); the seafloor's albedo is a seeded multi-scale value-noise texture
+// (sediment, brighter rocks and debris tops); a strobe beside the camera lights it with
+// Lambert shading, inverse-square falloff and exponential attenuation in sea water along
+// strobe -> seafloor -> camera; cos^4 vignetting; shot and read noise; 12 significant bits.
+
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "nav/core/geometry/types.h"
+#include "nav/sim/oracle.h"
+#include "nav/sim/seafloor.h"
+
+namespace nav::sim {
+
+struct RenderOptions {
+  core::Vec3 strobe_in_camera_m{0.0, -0.8, 0.0};  ///< strobe 0.8 m "up" in the image (aft)
+  double attenuation_per_m = 0.25;     ///< sea-water extinction coefficient, 1/m
+  double target_counts = 1500.0;       ///< auto exposure: mean-albedo floor at the nadir
+  double read_noise_counts = 3.0;      ///< 1 sigma
+  double counts_per_electron = 0.25;   ///< shot noise: sqrt(signal / gain) electrons
+  int thumbnail_width_px = 160;
+};
+
+class Renderer {
+ public:
+  Renderer(const CameraGeometry& camera, const Seafloor& seafloor, const RenderOptions& options,
+           std::uint64_t seed);
+  /// The frame (CV_16UC1, 2cy x 2cx, values 0..4095) seen from the true state `x`; the auto
+  /// exposure's gain relative to a floor 1 m below the camera goes to *gain_db.
+  cv::Mat render(const core::Vec12& x, std::uint64_t frame_seed, double* gain_db = nullptr) const;
+  /// Albedo of the seafloor at world x, y standing `relief_m` above the floor below the camera.
+  double albedo(double x_m, double y_m, double relief_m) const;
+  /// 8-bit thumbnail (width thumbnail_width_px, aspect kept) of a 12-bit frame.
+  cv::Mat thumbnail(const cv::Mat& frame) const;
+
+ private:
+  double value_noise(double x, double y, std::uint64_t octave_seed) const;
+
+  CameraGeometry camera_;
+  const Seafloor* seafloor_;
+  RenderOptions options_;
+  std::uint64_t seed_;
+};
+
+}  // namespace nav::sim
