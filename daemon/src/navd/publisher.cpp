@@ -75,7 +75,8 @@ void Publisher::publish_health(const SolutionView& view) {
   if (!good()) return;
   navlcm::health_t msg{};
   msg.utime = realtime_us();
-  msg.num_sensors = 0;  // per-sensor health: not produced by the sim source
+  if (sensors_ != nullptr) msg.sensors = sensors_->snapshot(monotonic_us());
+  msg.num_sensors = static_cast<std::int32_t>(msg.sensors.size());  // device threads only
   msg.queue_depth = static_cast<std::int32_t>(queue_.size());
   msg.queue_capacity = static_cast<std::int32_t>(queue_.capacity());
   msg.cg_relative_residual = view.cg_relative_residual;

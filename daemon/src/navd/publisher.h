@@ -10,6 +10,7 @@
 
 #include "nav/daemon/config.h"
 #include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/sources/sensor_health.h"
 #include "navd/mailboxes.h"
 
 namespace lcm {
@@ -31,6 +32,9 @@ class Publisher {
             const daemon::MeasurementQueue& queue);
   ~Publisher();
   bool good() const;
+  /// Per-sensor health of the device threads, published in health_t.sensors (call before
+  /// run(); the publisher thread is then the board's only snapshot reader). Null: none.
+  void set_sensor_health(daemon::SensorHealthBoard* sensors) { sensors_ = sensors; }
   /// Runs until `stop`, then publishes a last solution and health message.
   PublisherCounters run(const std::atomic<bool>& stop);
 
@@ -41,6 +45,7 @@ class Publisher {
   daemon::LcmConfig config_;
   const SolutionBoard& board_;
   const daemon::MeasurementQueue& queue_;
+  daemon::SensorHealthBoard* sensors_ = nullptr;
   std::unique_ptr<lcm::LCM> lcm_;
   PublisherCounters counters_;
 };
