@@ -99,7 +99,9 @@ std::vector<std::uint64_t> list_checkpoints(const fs::path& dir) {
   return out;
 }
 
-LoadResult load_newest_valid(const fs::path& dir) {
+LoadResult load_newest_valid(const fs::path& dir) { return load_newest_valid(dir, nullptr); }
+
+LoadResult load_newest_valid(const fs::path& dir, const CheckpointAcceptor& accept) {
   LoadResult result;
   const std::vector<std::uint64_t> sequences = list_checkpoints(dir);
   for (auto it = sequences.rbegin(); it != sequences.rend(); ++it) {
@@ -112,8 +114,12 @@ LoadResult load_newest_valid(const fs::path& dir) {
       reason = "sequence " + std::to_string(checkpoint->sequence) + " does not match the name";
       checkpoint.reset();
     }
+    if (checkpoint) checkpoint->path = path;
+    if (checkpoint && accept) {
+      reason = accept(*checkpoint);
+      if (!reason.empty()) checkpoint.reset();
+    }
     if (checkpoint) {
-      checkpoint->path = path;
       result.checkpoint = std::move(checkpoint);
       return result;
     }

@@ -21,6 +21,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -62,6 +63,12 @@ struct LoadResult {
 /// newer corrupt or truncated one is listed in `skipped`. Temp files and other names are ignored.
 /// A missing or empty directory gives an empty result.
 LoadResult load_newest_valid(const std::filesystem::path& dir);
+
+/// Says whether a verified checkpoint's payload can be resumed: "" to take it, else the reason
+/// (e.g. the payload's own decode error); the loader then skips it like a corrupt file.
+using CheckpointAcceptor = std::function<std::string(const Checkpoint&)>;
+/// Same, also skipping verified checkpoints that `accept` refuses (the reason is recorded).
+LoadResult load_newest_valid(const std::filesystem::path& dir, const CheckpointAcceptor& accept);
 
 /// Sequence numbers of the checkpoint files in `dir` (by name), ascending.
 std::vector<std::uint64_t> list_checkpoints(const std::filesystem::path& dir);

@@ -1,0 +1,377 @@
+// Checkpoints end to end at library level (issue "navd" §6, "nothing lost"): a dive (the
+// simulated survey of core/sim, with PCG recovery and Algorithm 1 bounds driven as navd does)
+// runs in a child process that checkpoints the map through the CheckpointWorker thread every few
+// steps and on completion; the parent kills it with SIGKILL at random moments, restarts it each
+// time, and the restarted child resumes from the newest valid checkpoint, skipping the steps
+// that checkpoint already contains. The final map must equal an uninterrupted run's bit for bit
+// (the steps after the last checkpoint are replayed from the log), with every delayed state.
+// A second test corrupts and truncates the newest checkpoints: they are reported with their
+// reason and skipped, the previous one is resumed, and the result is still bit-identical.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "nav/core/serialization/byte_io.h"
+#include "nav/core/serialization/map_codec.h"
+#include "nav/core/sim/survey.h"
+#include "nav/daemon/checkpoint.h"
+#include "nav/daemon/checkpoint_worker.h"
+
+namespace nav::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+using Bytes = std::vector<std::uint8_t>;
+using core::SectionSet;
+using core::SectionWriter;
+using core::Status;
+
+constexpr std::uint32_t kPayloadVersion = 1;
+constexpr std::uint32_t kDiveSectionTag = core::section_tag("SURV");
+constexpr int kCheckpointEverySteps = 6;
+
+core::sim::Survey make_survey() {
+  core::sim::SurveyOptions o;
+  o.num_images = 60;
+  o.images_per_line = 10;
+  o.seed = 11;
+  return core::sim::simulate_survey(o);
+}
+
+core::StateRecoveryOptions recovery_options() {
+  core::StateRecoveryOptions o;
+  o.iterations_per_step = 30;
+  return o;
+}
+
+/// The dive's map and its position in the log: what a checkpoint holds.
+struct Dive {
+  explicit Dive(const core::sim::Survey& s)
+      : survey(&s), filter(12), bounds(12), recovery(12, recovery_options()) {
+    (void)filter.initialize(s.x0_mean, s.P0);
+    (void)bounds.initialize_robot(s.P0);
+    (void)recovery.initialize(s.x0_mean, s.P0);
+  }
+
+  /// One survey step as navd's filter thread would do it; false on a filter error.
+  bool step() {
+    const core::sim::SurveyStep& st = survey->steps[next_step];
+    core::Mat12 F, Q;
+    const core::Vec12 f =
+        core::sim::predicted_mean(*survey, st, filter.mean_block(core::Esdf::kRobotBlock), &F, &Q);
+    const int blocks_before = filter.num_blocks();
+    if (!core::sim::apply_step(*survey, st, filter, image_blocks).ok()) return false;
+    const bool keep = st.image >= 0;
+    if (!bounds.predict_robot(F, Q, keep, keep ? image_blocks.back() : -1).ok()) return false;
+    if (!recovery.extend_for_prediction(F, Q, f, keep, keep ? blocks_before : -1).ok()) {
+      return false;
+    }
+    ++next_step;
+    if (!keep) return true;
+    const core::RecoveryResult r =
+        recovery.solve(filter.information(), filter.information_vector());
+    if (!r.status.ok() || !filter.set_mean(recovery.mean()).ok()) return false;
+    if (!bounds
+             .set_recovery(recovery.robot_covariance(), r.column_residual_frobenius,
+                           filter.num_blocks())
+             .ok()) {
+      return false;
+    }
+    for (const core::sim::CameraLink& link : st.links) {
+      const int a = image_blocks[static_cast<size_t>(link.image_a)];
+      const int b = image_blocks[static_cast<size_t>(link.image_b)];
+      core::MeasJac Ha, Hb;
+      survey->camera.predict(filter.mean_block(a), filter.mean_block(b), &Ha, &Hb);
+      core::LinkProposal p;
+      if (!bounds.propose(a, recovery.cross_covariance(a), &p).ok()) return false;
+      (void)bounds.update(p, Hb, Ha, survey->R_camera);
+    }
+    return true;
+  }
+
+  /// The checkpoint payload: map sections plus the dive's own (next step, image -> block).
+  Bytes encode() const {
+    SectionWriter w;
+    (void)core::add_map_sections(filter, &bounds, &w);
+    (void)core::add_recovery_section(recovery, &w);
+    core::ByteWriter dive;
+    dive.u64(next_step);
+    dive.u32(static_cast<std::uint32_t>(image_blocks.size()));
+    for (int b : image_blocks) dive.u32(static_cast<std::uint32_t>(b));
+    (void)w.add(kDiveSectionTag, 1, dive.data());
+    return w.finish();
+  }
+
+  /// Restores everything from a payload or returns the reason (nothing changed then).
+  std::string restore(const Bytes& payload) {
+    SectionSet set;
+    std::optional<core::Esdf> f;
+    std::optional<core::CovarianceBounds> b;
+    if (Status s = SectionSet::decode(payload, &set); !s.ok()) return s.to_string();
+    if (Status s = core::restore_map(set, &f, &b); !s.ok()) return s.to_string();
+    core::StateRecovery rec(12, recovery_options());
+    if (Status s = core::restore_recovery(set, f->num_blocks(), &rec); !s.ok()) return s.to_string();
+    const core::SectionView* v = nullptr;
+    if (Status s = set.require(kDiveSectionTag, 1, &v); !s.ok()) return s.to_string();
+    core::ByteReader r(v->bytes, "SURV section", v->offset);
+    std::uint64_t step = 0;
+    std::uint32_t n = 0;
+    if (Status s = r.u64(&step, "next step"); !s.ok()) return s.to_string();
+    if (Status s = r.u32(&n, "images"); !s.ok()) return s.to_string();
+    if (Status s = r.check_count(n, 4, "images"); !s.ok()) return s.to_string();
+    std::vector<int> blocks(n);
+    for (int& block : blocks) {
+      std::uint32_t x = 0;
+      if (Status s = r.u32(&x, "image block"); !s.ok()) return s.to_string();
+      if (x < 1 || x >= static_cast<std::uint32_t>(f->num_blocks())) return "bad image block";
+      block = static_cast<int>(x);
+    }
+    if (step > survey->steps.size()) return "next step beyond the dive";
+    filter = std::move(*f);
+    bounds = std::move(*b);
+    recovery = std::move(rec);
+    next_step = step;
+    image_blocks = std::move(blocks);
+    return "";
+  }
+
+  const core::sim::Survey* survey;
+  core::Esdf filter;
+  core::CovarianceBounds bounds;
+  core::StateRecovery recovery;
+  std::size_t next_step = 0;
+  std::vector<int> image_blocks;
+};
+
+std::string slurp(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+/// The child: resume (or start), run to the end with periodic checkpoints, checkpoint on
+/// completion, write the final map to final.bin. Logs each start to starts.log.
+[[noreturn]] void run_child(const core::sim::Survey& survey, const fs::path& dir) {
+  Dive dive(survey);
+  const LoadResult loaded = load_newest_valid(
+      dir / "checkpoints", [&dive](const Checkpoint& c) { return dive.restore(c.payload); });
+  {
+    std::ofstream log(dir / "starts.log", std::ios::app);
+    log << "start " << dive.next_step << " skipped " << loaded.skipped.size();
+    for (const SkippedCheckpoint& s : loaded.skipped) {
+      log << " [" << s.path.filename().string() << ": " << s.reason << "]";
+    }
+    log << "\n";
+  }
+  CheckpointWorker worker(dir / "checkpoints", 3);
+  while (dive.next_step < survey.steps.size()) {
+    if (!dive.step()) std::_Exit(3);
+    if (dive.next_step % kCheckpointEverySteps == 0) worker.offer(kPayloadVersion, dive.encode());
+  }
+  worker.offer(kPayloadVersion, dive.encode());  // the shutdown checkpoint
+  worker.stop();
+  const Bytes final_map = dive.encode();
+  std::ofstream(dir / "final.tmp", std::ios::binary)
+      .write(reinterpret_cast<const char*>(final_map.data()),
+             static_cast<std::streamsize>(final_map.size()));
+  fs::rename(dir / "final.tmp", dir / "final.bin");
+  std::_Exit(0);
+}
+
+class CheckpointResume : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("checkpoint_resume_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  /// Starts a child; returns its pid.
+  pid_t start(const core::sim::Survey& survey) {
+    const pid_t pid = ::fork();
+    if (pid == 0) run_child(survey, dir_);
+    return pid;
+  }
+  /// Waits for the child; its exit code, or -signal.
+  static int wait(pid_t pid) {
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(CheckpointResume, KilledAtRandomPointsResumesToTheSameMap) {
+  const core::sim::Survey survey = make_survey();
+  // The uninterrupted run (in process) and its duration, to place the kills.
+  const auto t0 = std::chrono::steady_clock::now();
+  Dive reference(survey);
+  while (reference.next_step < survey.steps.size()) ASSERT_TRUE(reference.step());
+  const Bytes expected = reference.encode();
+  const double run_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  ASSERT_EQ(reference.image_blocks.size(), 60u);
+
+  std::mt19937 rng(5);
+  int kills = 0;
+  for (int attempt = 0; attempt < 12 && kills < 5; ++attempt) {
+    const pid_t pid = start(survey);
+    std::uniform_real_distribution<double> when_ms(0.2 * run_ms, 1.2 * run_ms);
+    std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(when_ms(rng)));
+    ::kill(pid, SIGKILL);
+    const int code = wait(pid);
+    if (code == -SIGKILL) ++kills;
+    if (code == 0) fs::remove(dir_ / "final.bin");  // finished before the kill: start over
+    if (code == 0) fs::remove_all(dir_ / "checkpoints");
+    ASSERT_TRUE(code == 0 || code == -SIGKILL) << "child failed with " << code;
+  }
+  EXPECT_GE(kills, 3) << "the run is too short to be killed mid-way";
+  const pid_t last = start(survey);
+  ASSERT_EQ(wait(last), 0);
+  const std::string log = slurp(dir_ / "starts.log");
+  std::printf("uninterrupted %.0f ms, %d kills; starts (next step, skipped):\n%s", run_ms, kills,
+              log.c_str());
+  // At least one restart resumed from a checkpoint part-way through the dive.
+  EXPECT_TRUE(std::regex_search(log, std::regex("start [1-9][0-9]* "))) << log;
+
+  const std::string got = slurp(dir_ / "final.bin");
+  ASSERT_EQ(got.size(), expected.size());
+  EXPECT_TRUE(std::equal(expected.begin(), expected.end(),
+                         reinterpret_cast<const std::uint8_t*>(got.data())))
+      << "the resumed map differs from the uninterrupted one";
+  Dive resumed(survey);
+  ASSERT_EQ(resumed.restore(Bytes(got.begin(), got.end())), "");
+  EXPECT_EQ(resumed.filter.num_blocks(), 61);  // robot + every delayed state
+  EXPECT_EQ(resumed.bounds.num_bounds(), 60);
+}
+
+TEST_F(CheckpointResume, CorruptAndTruncatedNewestAreReportedAndSkipped) {
+  const core::sim::Survey survey = make_survey();
+  Dive reference(survey);
+  while (reference.next_step < survey.steps.size()) ASSERT_TRUE(reference.step());
+  const Bytes expected = reference.encode();
+
+  // Three checkpoints part-way (steps 60, 120, 180) as a killed run leaves them.
+  {
+    Dive dive(survey);
+    CheckpointWriter writer(dir_ / "checkpoints", 3);
+    while (dive.next_step < 180) {
+      ASSERT_TRUE(dive.step());
+      if (dive.next_step % 60 == 0) {
+        ASSERT_TRUE(writer.write(kPayloadVersion, dive.encode()).ok);
+      }
+    }
+  }
+  const std::vector<std::uint64_t> seqs = list_checkpoints(dir_ / "checkpoints");
+  ASSERT_EQ(seqs.size(), 3u);
+  // Newest truncated; second newest with one flipped payload byte.
+  const fs::path newest = checkpoint_path(dir_ / "checkpoints", seqs[2]);
+  fs::resize_file(newest, fs::file_size(newest) / 2);
+  const fs::path middle = checkpoint_path(dir_ / "checkpoints", seqs[1]);
+  {
+    std::fstream f(middle, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(kCheckpointHeaderBytes + 1000));
+    char c = 0;
+    f.read(&c, 1);
+    f.seekp(static_cast<std::streamoff>(kCheckpointHeaderBytes + 1000));
+    c = static_cast<char>(c ^ 0x04);
+    f.write(&c, 1);
+  }
+  const pid_t pid = start(survey);
+  ASSERT_EQ(wait(pid), 0);
+  const std::string log = slurp(dir_ / "starts.log");
+  std::printf("%s", log.c_str());
+  EXPECT_NE(log.find("start 60 skipped 2"), std::string::npos) << log;
+  EXPECT_NE(log.find(newest.filename().string() + ": truncated"), std::string::npos) << log;
+  EXPECT_NE(log.find(middle.filename().string() + ": payload CRC-32 mismatch"), std::string::npos)
+      << log;
+  const std::string got = slurp(dir_ / "final.bin");
+  EXPECT_TRUE(got.size() == expected.size() &&
+              std::equal(expected.begin(), expected.end(),
+                         reinterpret_cast<const std::uint8_t*>(got.data())));
+}
+
+TEST_F(CheckpointResume, PayloadThatDoesNotDecodeIsSkippedWithItsReason) {
+  const core::sim::Survey survey = make_survey();
+  CheckpointWriter writer(dir_ / "checkpoints", 3);
+  Dive dive(survey);
+  while (dive.next_step < 12) ASSERT_TRUE(dive.step());
+  ASSERT_TRUE(writer.write(kPayloadVersion, dive.encode()).ok);
+  // A file whose own checksums are fine but whose payload is not a map container.
+  const Bytes junk = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16};
+  ASSERT_TRUE(writer.write(kPayloadVersion, junk).ok);
+  Dive resumed(survey);
+  const LoadResult r = load_newest_valid(
+      dir_ / "checkpoints", [&resumed](const Checkpoint& c) { return resumed.restore(c.payload); });
+  ASSERT_TRUE(r.checkpoint.has_value());
+  EXPECT_EQ(resumed.next_step, 12u);
+  ASSERT_EQ(r.skipped.size(), 1u);
+  EXPECT_NE(r.skipped[0].reason.find("bad magic (not NAVSECTS)"), std::string::npos)
+      << r.skipped[0].reason;
+}
+
+TEST(CheckpointWorker, OffersAreWrittenSupersededAndFlushedOnStop) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("checkpoint_worker_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  {
+    CheckpointWorker worker(dir, 2);
+    for (std::uint8_t i = 0; i < 50; ++i) {
+      Bytes payload(1000, i);
+      EXPECT_TRUE(worker.offer(7, std::move(payload)));
+      EXPECT_TRUE(payload.empty());  // moved, no copy kept by the caller
+    }
+    worker.stop();
+    EXPECT_FALSE(worker.offer(7, Bytes(10, 0)));
+    const CheckpointWorkerStats s = worker.stats();
+    EXPECT_EQ(s.offered, 50u);
+    EXPECT_EQ(s.written + s.superseded, 50u);  // each offer is written or replaced
+    EXPECT_EQ(s.failed, 0u);
+    EXPECT_GE(s.written, 1u);
+  }
+  // The last offer (the shutdown checkpoint) is on disk, and only `keep` files remain.
+  const LoadResult r = load_newest_valid(dir);
+  ASSERT_TRUE(r.checkpoint.has_value());
+  EXPECT_EQ(r.checkpoint->payload, Bytes(1000, 49));
+  EXPECT_EQ(r.checkpoint->payload_version, 7u);
+  EXPECT_LE(list_checkpoints(dir).size(), 2u);
+  fs::remove_all(dir);
+}
+
+TEST(CheckpointWorker, WriteErrorsAreCountedAndTheThreadGoesOn) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("checkpoint_worker_err_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  CheckpointWorker worker(dir, 2);
+  fs::remove_all(dir);  // the directory vanishes under the worker
+  worker.offer(1, Bytes(10, 1));
+  worker.flush();
+  CheckpointWorkerStats s = worker.stats();
+  EXPECT_EQ(s.failed, 1u);
+  EXPECT_NE(s.last_error.find(dir.string()), std::string::npos) << s.last_error;
+  fs::create_directories(dir);
+  worker.offer(1, Bytes(10, 2));
+  worker.flush();
+  s = worker.stats();
+  EXPECT_EQ(s.written, 1u);
+  worker.stop();
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace nav::daemon
