@@ -170,8 +170,11 @@ TEST(Metrics, NeesOfOneStateByHand) {
   TrueImage im;
   im.frame_id = 3;
   im.pose << 0, 0, 0, 0, 0, -M_PI + 0.05;  // heading error 0.1 rad across the wrap
-  const NeesResult r = delayed_state_nees({s}, {im}, {});
+  DelayedState singular = s;               // a broken exact marginal is counted and skipped
+  singular.exact.setZero();
+  const NeesResult r = delayed_state_nees({s, singular}, {im}, {});
   ASSERT_EQ(r.nees.size(), 1u);
+  EXPECT_EQ(r.exact_not_positive_definite, 1u);
   EXPECT_NEAR(r.mean, (4.0 + 0.01) / 4.0, 1e-9);
   EXPECT_NEAR(r.xy_rms_m, 2.0, 1e-12);
 }

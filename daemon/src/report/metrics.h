@@ -42,10 +42,12 @@ struct NeesResult {
   double xy_rms_m = 0.0;     ///< XY RMS of the final state means against the same truth poses
   double mean = 0.0;
   std::pair<double, double> interval_95{0.0, 0.0};
-  size_t without_truth = 0;  ///< states whose truth pose could not be found
+  size_t without_truth = 0;                ///< states whose truth pose could not be found
+  size_t exact_not_positive_definite = 0;  ///< states skipped: e00..e55 not SPD
 };
 /// Truth per state: images.csv by frame_id when given, else truth.csv interpolated at t_us.
-/// Throws ReportError when no state has a truth pose or an exact marginal is not SPD.
+/// States without a truth pose or with a non-SPD exact marginal are counted and skipped (also in
+/// xy_rms_m); ReportError when no state is left.
 NeesResult delayed_state_nees(const std::vector<DelayedState>& states,
                               const std::vector<TrueImage>& images,
                               const std::vector<TimedPose>& truth);
