@@ -6,10 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
-#include <map>
 #include <numbers>
 #include <variant>
+#include <vector>
 
 #include "nav/core/geometry/rotation.h"
 #include "nav/drivers/codecs/altimeter.h"
@@ -43,7 +44,24 @@ struct Residuals {
   Stat dvl[3], heading, roll, pitch, depth, altitude, host_minus_validity_us;
   long dvl_valid = 0, dvl_invalid = 0;
   std::int64_t max_latency_us = 0;
+  std::vector<double> altitude_abs;  ///< |range - vertical distance to the seafloor below|
+  double altitude_median_abs() const {
+    std::vector<double> v = altitude_abs;
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  }
 };
+
+constexpr std::uint64_t kSeed = 11;
+constexpr int kImages = 120;
+
+/// The dive's seafloor, rebuilt as simulate_dive builds it (mission extent, seed stream 1).
+Seafloor dive_seafloor() {
+  MissionOptions m;
+  m.images = kImages;
+  const Mission mission = plan_mission(m);
+  return Seafloor(mission.extent, mission.wreck_x_m, mission.wreck_y_m, {}, derive_seed(kSeed, 1));
+}
 
 /// The tick (on the 50 ms sensor grid) at or before host time - config latency: the time of
 /// validity of a sample (the simulator's jitter and inter-sentence gap are < 50 ms).
@@ -54,6 +72,7 @@ std::int64_t validity_of(std::int64_t host_us, double latency_s, const TruthTabl
 
 Residuals decode_dive(const std::filesystem::path& dir, const SimSummary& s,
                       const SensorErrorOptions& errors) {
+  const Seafloor floor = dive_seafloor();
   const daemon::NavdConfig cfg = daemon::load_config_file((dir / "config.yaml").string());
   const TruthTable truth = read_truth(dir);
   const daemon::SensorConfig& dvl_cfg = cfg.sensors[0];
@@ -91,20 +110,25 @@ Residuals decode_dive(const std::filesystem::path& dir, const SimSummary& s,
     const std::int64_t t = validity_of(raw->host_monotonic_us, sensor->latency_s, truth);
     const core::Vec12& x = truth.at(t);
     // Host time beyond validity + the config latency: jitter and the gap after a sentence.
-    r.max_latency_us = std::max<std::int64_t>(r.max_latency_us, raw->host_monotonic_us - t -
-                                                      std::llround(sensor->latency_s * 1e6));
+    r.max_latency_us = std::max<std::int64_t>(
+        r.max_latency_us, raw->host_monotonic_us - t - std::llround(sensor->latency_s * 1e6));
     if (raw->device == "dvl") {
       ens.clear();
       pd0.feed(bytes, host, ens);
       for (const drivers::Pd0Ensemble& e : ens) {
         // The RTC (10 ms resolution) minus the DVL clock offset and drift gives the validity.
         const double since_s = (*e.time.sensor_time_us - kDiveStartRealtimeUs) * 1e-6;
-        const std::int64_t rtc_mono = *e.time.sensor_time_us - kDiveStartRealtimeUs + kDiveStartMonotonicUs -
-            std::llround((errors.dvl_clock_offset_s + errors.dvl_clock_drift_ppm * 1e-6 * since_s) * 1e6);
-        const std::int64_t validity = (rtc_mono - truth.t0_us + 25000) / 50000 * 50000 + truth.t0_us;
-        EXPECT_LE(std::abs(rtc_mono - validity), 10100) << "RTC far from its tick (10 ms resolution)";
+        const std::int64_t rtc_mono =
+            *e.time.sensor_time_us - kDiveStartRealtimeUs + kDiveStartMonotonicUs -
+            std::llround((errors.dvl_clock_offset_s + errors.dvl_clock_drift_ppm * 1e-6 * since_s) *
+                         1e6);
+        const std::int64_t validity =
+            (rtc_mono - truth.t0_us + 25000) / 50000 * 50000 + truth.t0_us;
+        EXPECT_LE(std::abs(rtc_mono - validity), 10100)
+            << "RTC far from its tick (10 ms resolution)";
         const core::Vec12& xv = truth.at(validity);
-        const core::Vec3 v_dvl = R_body_dvl.transpose() * (xv.segment<3>(6) + xv.segment<3>(9).cross(lever));
+        const core::Vec3 v_dvl =
+            R_body_dvl.transpose() * (xv.segment<3>(6) + xv.segment<3>(9).cross(lever));
         if (!e.bottom_track || !e.bottom_track->velocity_valid()) {
           ++r.dvl_invalid;
           continue;
@@ -135,11 +159,24 @@ Residuals decode_dive(const std::filesystem::path& dir, const SimSummary& s,
     } else if (raw->device == "altimeter") {
       ranges.clear();
       alt.feed(bytes, host, ranges);
-      for (const drivers::AltimeterRecord& a : ranges) EXPECT_TRUE(a.range_m.has_value());
+      for (const drivers::AltimeterRecord& a : ranges) {
+        EXPECT_TRUE(a.range_m.has_value());
+        // The range along the body z axis (the altimeter has no mount in sim.yaml), found
+        // here by marching down the axis in 1 cm steps until it is below the seafloor.
+        const core::Vec3 axis = core::rotation_from_euler(x.segment<3>(3)) * core::Vec3::UnitZ();
+        double along = 0.0;
+        while (along < 100.0) {
+          const core::Vec3 q = x.head<3>() + along * axis;
+          if (q.z() >= floor.depth_m(q.x(), q.y())) break;
+          along += 0.01;
+        }
+        r.altitude_abs.push_back(std::abs(*a.range_m - along));
+      }
     }
   }
   EXPECT_EQ(pd0.stats().checksum_failures + pd0.stats().malformed + pd0.stats().dropped_bytes +
-                pd0.stats().out_of_range, 0u);
+                pd0.stats().out_of_range,
+            0u);
   EXPECT_EQ(nmea.stats().checksum_failures + nmea.stats().malformed, 0u);
   EXPECT_EQ(paro.stats().records, static_cast<std::uint64_t>(s.sensors.depth_replies));
   EXPECT_EQ(alt.stats().records, static_cast<std::uint64_t>(s.sensors.altimeter_lines));
@@ -149,8 +186,8 @@ Residuals decode_dive(const std::filesystem::path& dir, const SimSummary& s,
 SimSummary simulate(const std::filesystem::path& dir, const SensorErrorOptions& errors) {
   SimOptions o;
   o.out_dir = dir.string();
-  o.seed = 11;
-  o.mission.images = 120;
+  o.seed = kSeed;
+  o.mission.images = kImages;
   o.sensor_errors = errors;
   return simulate_dive(o, sim_config_path().string());
 }
@@ -173,6 +210,8 @@ TEST(SimDecode, IdealSensorsDecodeToTruthWithinTheirNoise) {
   EXPECT_NEAR(r.depth.rms(), 0.01, 0.001);
   EXPECT_NEAR(r.depth.mean(), 0.0, 0.001);
   EXPECT_GT(r.heading.n, 9000);
+  // Median |N(0, 0.1 m)| = 0.0674 m; PA500 lines carry 1 cm, the march 1 cm steps.
+  EXPECT_NEAR(r.altitude_median_abs(), 0.0674, 0.01);
   // host time = validity + config latency + jitter (<= 2 ms) + the gap after HDT (< 3 ms).
   EXPECT_LE(r.max_latency_us, 5000);
 }

@@ -22,13 +22,15 @@ TEST(SimMission, DefaultDiveIsThePapersSurveyInSize) {
   o.out_dir = scratch_dir("default").string();
   const auto start = std::chrono::steady_clock::now();
   const SimSummary s = simulate_dive(o, sim_config_path().string());
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("default dive: %lld images, %.0f s, track %.1f m, hull %.1f m^2, altitude "
-              "%.2f/%.2f/%.2f m, %lld registrations (%lld ok, %lld outliers), %.2f s wall\n",
-              static_cast<long long>(s.images), s.duration_s, s.track_length_m,
-              s.survey_hull_area_m2, s.min_altitude_m, s.mean_altitude_m, s.max_altitude_m,
-              static_cast<long long>(s.registrations), static_cast<long long>(s.registrations_succeeded),
-              static_cast<long long>(s.outliers_injected), wall_s);
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf(
+      "default dive: %lld images, %.0f s, track %.1f m, hull %.1f m^2, altitude "
+      "%.2f/%.2f/%.2f m, %lld registrations (%lld ok, %lld outliers), %.2f s wall\n",
+      static_cast<long long>(s.images), s.duration_s, s.track_length_m, s.survey_hull_area_m2,
+      s.min_altitude_m, s.mean_altitude_m, s.max_altitude_m,
+      static_cast<long long>(s.registrations), static_cast<long long>(s.registrations_succeeded),
+      static_cast<long long>(s.outliers_injected), wall_s);
   EXPECT_EQ(s.images, 866);
   EXPECT_NEAR(s.track_length_m, 3000.0, 300.0);
   EXPECT_NEAR(s.survey_hull_area_m2, 3100.0, 300.0);
@@ -57,8 +59,8 @@ TEST(SimMission, ConvexGeometry) {
 TEST(SimMission, SeafloorHasAWreckAtDepth) {
   const GridExtent e{-40.0, 40.0, -20.0, 60.0};
   const Seafloor a(e, 0.0, 20.0, {}, 3), b(e, 0.0, 20.0, {}, 3), c(e, 0.0, 20.0, {}, 4);
-  EXPECT_NEAR(a.depth_m(0.0, -15.0), 3800.0, 3.0);        // the mud beside the wreck
-  std::vector<double> deck;  // open deck beside the deckhouses, ~10 m proud
+  EXPECT_NEAR(a.depth_m(0.0, -15.0), 3800.0, 3.0);  // the mud beside the wreck
+  std::vector<double> deck;                         // open deck beside the deckhouses, ~10 m proud
   for (double x = -8.0; x < -4.0; x += 0.1)
     for (double y = 10.0; y < 12.0; y += 0.1) deck.push_back(a.relief_height_m(x, y));
   std::nth_element(deck.begin(), deck.begin() + deck.size() / 2, deck.end());

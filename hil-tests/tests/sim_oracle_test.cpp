@@ -4,11 +4,10 @@
 // outlier rate is as asked.
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
 #include <map>
-
-#include <Eigen/Dense>
 #include <variant>
 
 #include "nav/core/geometry/rotation.h"
@@ -38,7 +37,8 @@ Dive simulate(const std::string& name, double outlier_rate, int images) {
   d.summary = simulate_dive(o, sim_config_path().string());
   std::string header;
   d.images = read_csv(d.dir / "images.csv", &header);
-  EXPECT_EQ(header, "frame_id,t_us,x_m,y_m,z_m,roll_rad,pitch_rad,heading_rad,altitude_m,camera_on");
+  EXPECT_EQ(header,
+            "frame_id,t_us,x_m,y_m,z_m,roll_rad,pitch_rad,heading_rad,altitude_m,camera_on");
   for (daemon::DiveLogEvent& e : read_log(d.dir)) {
     if (auto* m = std::get_if<navlcm::image_metadata_t>(&e)) d.nav_images.push_back(*m);
     if (auto* r = std::get_if<navlcm::registration_t>(&e)) d.registrations.push_back(*r);
@@ -62,7 +62,8 @@ core::CameraRelativePoseModel camera_model() {
   return RegistrationOracle(CameraGeometry::from_config(cfg.sensors[4]), {}, 1).model();
 }
 
-double nees(const navlcm::registration_t& r, const Dive& d, const core::CameraRelativePoseModel& m) {
+double nees(const navlcm::registration_t& r, const Dive& d,
+            const core::CameraRelativePoseModel& m) {
   const core::Vec12 xi = pose_of(d.images[static_cast<std::size_t>(r.frame_id_i)]);
   const core::Vec12 xj = pose_of(d.images[static_cast<std::size_t>(r.frame_id_j)]);
   const core::MeasVec z_true = m.predict(xi, xj);
@@ -117,7 +118,8 @@ TEST(SimOracle, CameraOffTransitHasNoImagesAndImagingResumesWithALoopClosure) {
   for (const navlcm::registration_t& r : d.registrations) {
     if (!r.success || r.frame_id_j < f0 || r.frame_id_j > f0 + 12) continue;
     const double gap_s = (d.images[static_cast<std::size_t>(r.frame_id_j)][1] -
-                          d.images[static_cast<std::size_t>(r.frame_id_i)][1]) * 1e-6;
+                          d.images[static_cast<std::size_t>(r.frame_id_i)][1]) *
+                         1e-6;
     if (r.frame_id_i < 15 && gap_s > 0.8 * first_leg_s) ++loop_closures;
   }
   std::printf("frame %lld resumes imaging; %d loop closures to the first line\n",

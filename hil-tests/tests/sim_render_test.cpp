@@ -26,7 +26,8 @@ TEST(SimRender, DiveWritesPngFramesAndThumbnails) {
     const auto* m = std::get_if<navlcm::image_metadata_t>(&e);
     if (!m) continue;
     char expected[32];
-    std::snprintf(expected, sizeof expected, "images/%06lld.png", static_cast<long long>(m->frame_id));
+    std::snprintf(expected, sizeof expected, "images/%06lld.png",
+                  static_cast<long long>(m->frame_id));
     EXPECT_EQ(m->file_path, expected);
     const cv::Mat im = cv::imread((dir / m->file_path).string(), cv::IMREAD_UNCHANGED);
     ASSERT_FALSE(im.empty()) << m->file_path;

@@ -21,7 +21,11 @@ const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchClea
 struct Stat {
   double sum = 0.0, sum_sq = 0.0;
   long n = 0;
-  void add(double r) { sum += r; sum_sq += r * r; ++n; }
+  void add(double r) {
+    sum += r;
+    sum_sq += r * r;
+    ++n;
+  }
   double mean() const { return sum / n; }
   double sd() const { return std::sqrt(sum_sq / n - mean() * mean()); }
 };
@@ -43,7 +47,8 @@ TEST(SimReplaySource, DiveDecodesThroughNavdsSourceAtTheTruth) {
   std::atomic<bool> stop{false}, done{false};
   daemon::DiveLogSourceOptions options;
   options.as_fast_as_possible = true;
-  const daemon::DiveLogSourceCounters c = daemon::run_dive_log_source(log, cfg, options, queue, stop, done);
+  const daemon::DiveLogSourceCounters c =
+      daemon::run_dive_log_source(log, cfg, options, queue, stop, done);
   EXPECT_EQ(c.decode_errors, 0u);
   for (std::size_t i = 0; i < c.sensors.size(); ++i)
     EXPECT_EQ(c.sensors[i].decode_errors, 0u) << cfg.sensors[i].name;
@@ -53,11 +58,13 @@ TEST(SimReplaySource, DiveDecodesThroughNavdsSourceAtTheTruth) {
   EXPECT_EQ(c.registrations, static_cast<std::uint64_t>(s.registrations));
   ASSERT_EQ(c.sensors.size(), cfg.sensors.size());
   EXPECT_EQ(c.sensors[0].invalid, static_cast<std::uint64_t>(s.sensors.dvl_invalid_ensembles));
-  EXPECT_GT(c.sensors[0].device_clock, c.sensors[0].measurements * 9 / 10) << "DVL dated by its RTC";
+  EXPECT_GT(c.sensors[0].device_clock, c.sensors[0].measurements * 9 / 10)
+      << "DVL dated by its RTC";
 
   const SensorErrorOptions& e = o.sensor_errors;
   const core::Mat3 R_body_dvl = core::rotation_from_euler(
-      core::Vec3(cfg.sensors[0].mount.rpy_rad[0], cfg.sensors[0].mount.rpy_rad[1], cfg.sensors[0].mount.rpy_rad[2]));
+      core::Vec3(cfg.sensors[0].mount.rpy_rad[0], cfg.sensors[0].mount.rpy_rad[1],
+                 cfg.sensors[0].mount.rpy_rad[2]));
   const core::Vec3 lever(cfg.sensors[0].mount.lever_arm_m[0], cfg.sensors[0].mount.lever_arm_m[1],
                          cfg.sensors[0].mount.lever_arm_m[2]);
   Stat dvl, heading, depth;
@@ -71,8 +78,11 @@ TEST(SimReplaySource, DiveDecodesThroughNavdsSourceAtTheTruth) {
     const core::Vec12& x = truth.at(tick);
     if (const auto* d = std::get_if<daemon::DvlVelocity>(&m)) {
       worst_dvl_time_us = std::max<std::int64_t>(worst_dvl_time_us, std::abs(v - tick));
-      const core::Vec3 v_dvl = R_body_dvl.transpose() * (x.segment<3>(6) + x.segment<3>(9).cross(lever));
-      for (int i = 0; i < 3; ++i) dvl.add(d->v_sensor_mps[static_cast<std::size_t>(i)] - (1.0 + e.dvl_scale_error) * v_dvl[i]);
+      const core::Vec3 v_dvl =
+          R_body_dvl.transpose() * (x.segment<3>(6) + x.segment<3>(9).cross(lever));
+      for (int i = 0; i < 3; ++i)
+        dvl.add(d->v_sensor_mps[static_cast<std::size_t>(i)] -
+                (1.0 + e.dvl_scale_error) * v_dvl[i]);
     } else if (const auto* a = std::get_if<daemon::Attitude>(&m)) {
       worst_ascii_time_us = std::max<std::int64_t>(worst_ascii_time_us, std::abs(v - tick));
       if (a->has_heading) heading.add(core::wrap_angle(a->heading_rad - x[5]));
@@ -89,11 +99,12 @@ TEST(SimReplaySource, DiveDecodesThroughNavdsSourceAtTheTruth) {
     }
   }
   EXPECT_EQ(image_k, 60u);
-  std::printf("DVL residual mean %.5f sd %.5f m/s (n %ld), worst DVL time error %lld us, "
-              "worst ASCII time error %lld us, heading mean %.4f deg, depth mean %.4f sd %.4f m\n",
-              dvl.mean(), dvl.sd(), dvl.n, static_cast<long long>(worst_dvl_time_us),
-              static_cast<long long>(worst_ascii_time_us), heading.mean() * 180 / std::numbers::pi,
-              depth.mean(), depth.sd());
+  std::printf(
+      "DVL residual mean %.5f sd %.5f m/s (n %ld), worst DVL time error %lld us, "
+      "worst ASCII time error %lld us, heading mean %.4f deg, depth mean %.4f sd %.4f m\n",
+      dvl.mean(), dvl.sd(), dvl.n, static_cast<long long>(worst_dvl_time_us),
+      static_cast<long long>(worst_ascii_time_us), heading.mean() * 180 / std::numbers::pi,
+      depth.mean(), depth.sd());
   EXPECT_LE(worst_ascii_time_us, 5000) << "jitter <= 2 ms plus the gap after HDT";
   EXPECT_LE(worst_dvl_time_us, 20000) << "RTC: 10 ms resolution, offset and drift mapped away";
   EXPECT_NEAR(dvl.sd(), 0.01, 0.0015);

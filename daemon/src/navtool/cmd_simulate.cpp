@@ -32,7 +32,8 @@ struct SimulateArgs {
 void draw_progress(double fraction) {
   const int width = 40;
   const int filled = static_cast<int>(fraction * width + 0.5);
-  std::fprintf(stderr, "\rsimulating [%s%s] %3d %%", std::string(static_cast<std::size_t>(filled), '#').c_str(),
+  std::fprintf(stderr, "\rsimulating [%s%s] %3d %%",
+               std::string(static_cast<std::size_t>(filled), '#').c_str(),
                std::string(static_cast<std::size_t>(width - filled), ' ').c_str(),
                static_cast<int>(fraction * 100.0 + 0.5));
   if (fraction >= 1.0) std::fputc('\n', stderr);
@@ -58,7 +59,8 @@ void run_simulate(const SimulateArgs& args) {
   } catch (const std::runtime_error& e) {
     throw CommandError(std::string("simulate: ") + e.what());
   }
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (args.json) std::cout << s.to_json().dump() << std::endl;
   std::fprintf(stderr,
                "navtool simulate: %s: %lld images, %.0f s dive, track %.0f m, hull %.0f m^2, "

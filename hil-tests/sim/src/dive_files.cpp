@@ -11,16 +11,17 @@
 
 namespace nav::sim {
 
-DiveFiles::DiveFiles(const std::filesystem::path& dir, const std::string& config_yaml)
-    : dir_(dir) {
+DiveFiles::DiveFiles(const std::filesystem::path& dir, const std::string& config_yaml) : dir_(dir) {
   {
     std::ofstream cfg(dir / "config.yaml", std::ios::binary | std::ios::trunc);
     cfg << config_yaml;
     if (!cfg) throw std::runtime_error((dir / "config.yaml").string() + ": cannot write");
   }
   truth_ = open("truth.csv");
-  std::fputs("t_us,x_m,y_m,z_m,roll_rad,pitch_rad,heading_rad,u_mps,v_mps,w_mps,p_radps,q_radps,"
-             "r_radps\n", truth_.get());
+  std::fputs(
+      "t_us,x_m,y_m,z_m,roll_rad,pitch_rad,heading_rad,u_mps,v_mps,w_mps,p_radps,q_radps,"
+      "r_radps\n",
+      truth_.get());
   images_ = open("images.csv");
   std::fputs("frame_id,t_us,x_m,y_m,z_m,roll_rad,pitch_rad,heading_rad,altitude_m,camera_on\n",
              images_.get());
@@ -28,7 +29,8 @@ DiveFiles::DiveFiles(const std::filesystem::path& dir, const std::string& config
 
 DiveFiles::File DiveFiles::open(const std::string& name) {
   File f(std::fopen((dir_ / name).c_str(), "wb"));
-  if (!f) throw std::runtime_error((dir_ / name).string() + ": cannot create: " + std::strerror(errno));
+  if (!f)
+    throw std::runtime_error((dir_ / name).string() + ": cannot create: " + std::strerror(errno));
   return f;
 }
 
@@ -40,8 +42,7 @@ void DiveFiles::close(File& f, const std::string& name) {
 }
 
 void DiveFiles::truth(std::int64_t t_us, const core::Vec12& x) {
-  std::fprintf(truth_.get(),
-               "%lld,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f\n",
+  std::fprintf(truth_.get(), "%lld,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f\n",
                static_cast<long long>(t_us), x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8],
                x[9], x[10], x[11]);
 }
@@ -91,7 +92,8 @@ std::int64_t DiveFiles::write_log() {
   std::vector<std::tuple<std::int64_t, int, std::size_t>> order;
   order.reserve(raw_.size() + image_events_.size() + registration_events_.size());
   for (std::size_t i = 0; i < raw_.size(); ++i) order.emplace_back(raw_[i].host_monotonic_us, 0, i);
-  for (std::size_t i = 0; i < image_events_.size(); ++i) order.emplace_back(image_events_[i].first, 1, i);
+  for (std::size_t i = 0; i < image_events_.size(); ++i)
+    order.emplace_back(image_events_[i].first, 1, i);
   for (std::size_t i = 0; i < registration_events_.size(); ++i)
     order.emplace_back(registration_events_[i].first, 2, i);
   std::sort(order.begin(), order.end());

@@ -7,13 +7,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <string>
-#include <vector>
-
 #include <navlcm/image_metadata_t.hpp>
 #include <navlcm/registration_t.hpp>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
+#include <string>
+#include <vector>
 
 #include "nav/core/geometry/types.h"
 #include "nav/sim/oracle.h"
@@ -46,7 +45,9 @@ class DiveFiles {
 
  private:
   struct FileCloser {
-    void operator()(std::FILE* f) const { if (f) std::fclose(f); }
+    void operator()(std::FILE* f) const {
+      if (f) std::fclose(f);
+    }
   };
   using File = std::unique_ptr<std::FILE, FileCloser>;
   File open(const std::string& name);

@@ -9,10 +9,13 @@ namespace nav::sim {
 
 const char* MissionOptions::validate() const {
   if (images < 2) return "images: must be >= 2";
-  if (!(image_period_s > 0.1 && image_period_s < 3600.0)) return "image_period_s: outside (0.1, 3600) s";
+  if (!(image_period_s > 0.1 && image_period_s < 3600.0))
+    return "image_period_s: outside (0.1, 3600) s";
   if (!(speed_mps >= 0.05 && speed_mps <= 3.0)) return "speed_mps: outside [0.05, 3] m/s";
-  if (!(line_length_m >= 2.0 && line_length_m <= 1000.0)) return "line_length_m: outside [2, 1000] m";
-  if (!(line_spacing_m >= 0.1 && line_spacing_m <= 100.0)) return "line_spacing_m: outside [0.1, 100] m";
+  if (!(line_length_m >= 2.0 && line_length_m <= 1000.0))
+    return "line_length_m: outside [2, 1000] m";
+  if (!(line_spacing_m >= 0.1 && line_spacing_m <= 100.0))
+    return "line_spacing_m: outside [0.1, 100] m";
   if (!(altitude_m >= 0.5 && altitude_m <= 100.0)) return "altitude_m: outside [0.5, 100] m";
   return "";
 }
@@ -66,10 +69,12 @@ Guidance::Command Guidance::update(double x_m, double y_m) {
         has_start_override_ ? start_override_ : wp[static_cast<std::size_t>(segment_)];
     const Waypoint& b = wp[static_cast<std::size_t>(segment_ + 1)];
     const double len = std::hypot(b.x_m - a.x_m, b.y_m - a.y_m);
-    const double along = len > 0.0 ? ((x_m - a.x_m) * (b.x_m - a.x_m) + (y_m - a.y_m) * (b.y_m - a.y_m)) / len : len;
+    const double along =
+        len > 0.0 ? ((x_m - a.x_m) * (b.x_m - a.x_m) + (y_m - a.y_m) * (b.y_m - a.y_m)) / len : len;
     if (along < len) break;
     has_start_override_ = false;
-    if (transit_requested_ && at_line_end() && segment_ + 2 < static_cast<int>(mission_->transit_end)) {
+    if (transit_requested_ && at_line_end() &&
+        segment_ + 2 < static_cast<int>(mission_->transit_end)) {
       start_override_ = wp[static_cast<std::size_t>(segment_ + 1)];
       has_start_override_ = true;
       segment_ = static_cast<int>(mission_->transit_end) - 1;
@@ -84,7 +89,8 @@ Guidance::Command Guidance::update(double x_m, double y_m) {
     c.camera_on = wp.back().camera_on;
     return c;
   }
-  const Waypoint& a = has_start_override_ ? start_override_ : wp[static_cast<std::size_t>(segment_)];
+  const Waypoint& a =
+      has_start_override_ ? start_override_ : wp[static_cast<std::size_t>(segment_)];
   const Waypoint& b = wp[static_cast<std::size_t>(segment_ + 1)];
   const double chi = std::atan2(b.y_m - a.y_m, b.x_m - a.x_m);
   // Cross-track error, positive when the vehicle is to starboard of the path.

@@ -36,7 +36,8 @@ Polygon2 image_footprint(const CameraGeometry& cam, const core::Vec12& x, double
   const double w = 2.0 * cam.cx_px, h = 2.0 * cam.cy_px;
   Polygon2 poly;
   for (const auto& [u, v] : {std::pair{0.0, 0.0}, {w, 0.0}, {w, h}, {0.0, h}}) {
-    const core::Vec3 d = R * core::Vec3((u - cam.cx_px) / cam.fx_px, (v - cam.cy_px) / cam.fy_px, 1.0);
+    const core::Vec3 d =
+        R * core::Vec3((u - cam.cx_px) / cam.fx_px, (v - cam.cy_px) / cam.fy_px, 1.0);
     if (d.z() < 0.05 || floor_depth_m <= p.z()) return {};
     const double t = (floor_depth_m - p.z()) / d.z();
     poly.push_back({p.x() + t * d.x(), p.y() + t * d.y()});
@@ -98,8 +99,9 @@ std::optional<navlcm::registration_t> RegistrationOracle::try_pair(const Stored&
   r.frame_id_i = i.image.frame_id;
   r.frame_id_j = j.frame_id;
   r.overlap_fraction = overlap;
-  const double o = std::clamp((overlap - options_.overlap_zero) /
-                                  (options_.overlap_full - options_.overlap_zero), 0.0, 1.0);
+  const double o = std::clamp(
+      (overlap - options_.overlap_zero) / (options_.overlap_full - options_.overlap_zero), 0.0,
+      1.0);
   const double gap_s = (j.t_us - i.image.t_us) * 1e-6;
   const double p_success = options_.max_success_probability * o *
                            (0.3 + 0.7 * std::exp(-gap_s / options_.time_gap_scale_s));

@@ -2,9 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <random>
-
 #include <opencv2/imgproc.hpp>
+#include <random>
 
 #include "nav/core/geometry/pose.h"
 #include "nav/core/geometry/rotation.h"
@@ -43,7 +42,8 @@ double Renderer::albedo(double x_m, double y_m, double relief_m) const {
   const double mid = value_noise(x_m / 0.15, y_m / 0.15, seed_ + 2);
   const double coarse = value_noise(x_m / 1.2, y_m / 1.2, seed_ + 3);
   const double relief = std::clamp(relief_m / 3.0, 0.0, 1.0);
-  const double a = 0.35 + 0.12 * (fine - 0.5) + 0.2 * (mid - 0.5) + 0.25 * (coarse - 0.5) + 0.2 * relief;
+  const double a =
+      0.35 + 0.12 * (fine - 0.5) + 0.2 * (mid - 0.5) + 0.25 * (coarse - 0.5) + 0.2 * relief;
   return std::clamp(a, 0.05, 1.0);
 }
 
@@ -80,8 +80,10 @@ cv::Mat Renderer::render(const core::Vec12& x, std::uint64_t frame_seed, double*
           t = std::max(0.05, (seafloor_->depth_m(q.x(), q.y()) - p_cam.z()) / d.z());
         }
         const core::Vec3 q = p_cam + t * d;
-        const double dzdx = (seafloor_->depth_m(q.x() + e, q.y()) - seafloor_->depth_m(q.x() - e, q.y())) / (2 * e);
-        const double dzdy = (seafloor_->depth_m(q.x(), q.y() + e) - seafloor_->depth_m(q.x(), q.y() - e)) / (2 * e);
+        const double dzdx =
+            (seafloor_->depth_m(q.x() + e, q.y()) - seafloor_->depth_m(q.x() - e, q.y())) / (2 * e);
+        const double dzdy =
+            (seafloor_->depth_m(q.x(), q.y() + e) - seafloor_->depth_m(q.x(), q.y() - e)) / (2 * e);
         const core::Vec3 n = core::Vec3(dzdx, dzdy, -1.0).normalized();  // up, out of the floor
         const core::Vec3 to_strobe = p_strobe - q;
         const double r_strobe = to_strobe.norm(), r_cam = t * d.norm();
@@ -89,10 +91,12 @@ cv::Mat Renderer::render(const core::Vec12& x, std::uint64_t frame_seed, double*
         const double cos_axis = 1.0 / ray_cam.norm();
         const double cos2 = cos_axis * cos_axis;
         signal = albedo(q.x(), q.y(), floor0 - q.z()) * lambert / (r_strobe * r_strobe) *
-                 std::exp(-options_.attenuation_per_m * (r_strobe + r_cam)) * cos2 * cos2 * exposure;
+                 std::exp(-options_.attenuation_per_m * (r_strobe + r_cam)) * cos2 * cos2 *
+                 exposure;
       }
       const double shot = std::sqrt(std::max(0.0, signal) * options_.counts_per_electron);
-      const double value = signal + shot * normal(rng) + options_.read_noise_counts * normal(rng) + 40.0;
+      const double value =
+          signal + shot * normal(rng) + options_.read_noise_counts * normal(rng) + 40.0;
       row[u] = static_cast<std::uint16_t>(std::clamp(std::lround(value), 0L, 4095L));
     }
   }

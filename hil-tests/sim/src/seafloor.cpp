@@ -56,7 +56,9 @@ double Seafloor::Grid::sample(double x_m, double y_m) const {
   const int ix = std::min(static_cast<int>(fx), nx - 2);
   const int iy = std::min(static_cast<int>(fy), ny - 2);
   const double ax = fx - ix, ay = fy - iy;
-  auto at = [&](int jx, int jy) { return static_cast<double>(values[static_cast<std::size_t>(jy * nx + jx)]); };
+  auto at = [&](int jx, int jy) {
+    return static_cast<double>(values[static_cast<std::size_t>(jy * nx + jx)]);
+  };
   return (1 - ay) * ((1 - ax) * at(ix, iy) + ax * at(ix + 1, iy)) +
          ay * ((1 - ax) * at(ix, iy + 1) + ax * at(ix + 1, iy + 1));
 }
@@ -89,15 +91,16 @@ void Seafloor::build_relief(std::uint64_t seed) {
   const double two_pi = 2.0 * std::numbers::pi;
   for (double wavelength_m : {60.0, 23.0, 9.0, 3.5}) {
     const double dir = range(0.0, two_pi), k = two_pi / (wavelength_m * range(0.8, 1.25));
-    waves_.push_back({k * std::cos(dir), k * std::sin(dir), range(0.0, two_pi),
-                      0.006 * wavelength_m});
+    waves_.push_back(
+        {k * std::cos(dir), k * std::sin(dir), range(0.0, two_pi), 0.006 * wavelength_m});
   }
 
   const SeafloorOptions& o = options_;
   const double half_beam = 0.5 * o.hull_beam_m;
   const double break_phase = range(0.0, two_pi);
   // Deck fittings (site frame): deckhouses on the boat deck, then random winches and davits.
-  std::vector<Block> deck = {{-16.0, 0.0, 6.0, 7.0, 0.0, 2.6}, {14.0, 0.0, 9.0, 7.5, 0.0, 2.6},
+  std::vector<Block> deck = {{-16.0, 0.0, 6.0, 7.0, 0.0, 2.6},
+                             {14.0, 0.0, 9.0, 7.5, 0.0, 2.6},
                              {2.0, 0.0, 2.5, 4.0, 0.0, 4.5}};
   for (int i = 0; i < 40; ++i)
     deck.push_back({range(o.break_x_m + 4.0, 60.0), range(-half_beam + 1.0, half_beam - 1.0),
@@ -106,16 +109,20 @@ void Seafloor::build_relief(std::uint64_t seed) {
   std::vector<Block> debris;
   for (int i = 0; i < 260; ++i) {
     const bool near_break = i < 200;
-    const double cx = near_break ? o.break_x_m - std::abs(range(-1.0, 1.0)) * 35.0
-                                 : range(-60.0, 60.0);
+    const double cx =
+        near_break ? o.break_x_m - std::abs(range(-1.0, 1.0)) * 35.0 : range(-60.0, 60.0);
     debris.push_back({cx, near_break ? range(-22.0, 22.0) : range(-40.0, 40.0), range(0.2, 2.0),
                       range(0.15, 1.2), range(0.0, two_pi), range(0.15, near_break ? 2.5 : 0.8)});
   }
   for (int i = 0; i < 900; ++i)
-    debris.push_back({range(-70.0, 70.0), range(-50.0, 50.0), range(0.05, 0.25),
-                      range(0.05, 0.2), range(0.0, two_pi), range(0.05, 0.2)});
+    debris.push_back({range(-70.0, 70.0), range(-50.0, 50.0), range(0.05, 0.25), range(0.05, 0.2),
+                      range(0.0, two_pi), range(0.05, 0.2)});
 
-  depth_ = {extent_.x_min_m, extent_.y_min_m, o.resolution_m, nx_, ny_,
+  depth_ = {extent_.x_min_m,
+            extent_.y_min_m,
+            o.resolution_m,
+            nx_,
+            ny_,
             std::vector<float>(static_cast<std::size_t>(nx_) * ny_)};
   std::vector<float> hull_top(depth_.values.size(), 0.0f);
   for (int iy = 0; iy < ny_; ++iy) {
@@ -140,10 +147,16 @@ void Seafloor::build_relief(std::uint64_t seed) {
   auto stamp = [&](const Block& b, bool on_deck) {
     const double c = std::cos(b.yaw_rad), s = std::sin(b.yaw_rad);
     const double r = std::hypot(b.half_length_m, b.half_width_m);
-    const int ix0 = std::max(0, static_cast<int>((wreck_x_m_ + b.cx_m - r - extent_.x_min_m) / o.resolution_m));
-    const int ix1 = std::min(nx_ - 1, static_cast<int>((wreck_x_m_ + b.cx_m + r - extent_.x_min_m) / o.resolution_m) + 1);
-    const int iy0 = std::max(0, static_cast<int>((wreck_y_m_ + b.cy_m - r - extent_.y_min_m) / o.resolution_m));
-    const int iy1 = std::min(ny_ - 1, static_cast<int>((wreck_y_m_ + b.cy_m + r - extent_.y_min_m) / o.resolution_m) + 1);
+    const int ix0 =
+        std::max(0, static_cast<int>((wreck_x_m_ + b.cx_m - r - extent_.x_min_m) / o.resolution_m));
+    const int ix1 = std::min(
+        nx_ - 1,
+        static_cast<int>((wreck_x_m_ + b.cx_m + r - extent_.x_min_m) / o.resolution_m) + 1);
+    const int iy0 =
+        std::max(0, static_cast<int>((wreck_y_m_ + b.cy_m - r - extent_.y_min_m) / o.resolution_m));
+    const int iy1 = std::min(
+        ny_ - 1,
+        static_cast<int>((wreck_y_m_ + b.cy_m + r - extent_.y_min_m) / o.resolution_m) + 1);
     for (int iy = iy0; iy <= iy1; ++iy) {
       for (int ix = ix0; ix <= ix1; ++ix) {
         const double dx = extent_.x_min_m + ix * o.resolution_m - wreck_x_m_ - b.cx_m;
@@ -152,7 +165,7 @@ void Seafloor::build_relief(std::uint64_t seed) {
         if (std::abs(along) > b.half_length_m || std::abs(across) > b.half_width_m) continue;
         const std::size_t k = static_cast<std::size_t>(iy * nx_ + ix);
         if (on_deck && hull_top[k] < 0.5 * o.hull_height_m) continue;  // fittings stay on deck
-        depth_.values[k] -= static_cast<float>(b.height_m);  // stacked debris piles up
+        depth_.values[k] -= static_cast<float>(b.height_m);            // stacked debris piles up
       }
     }
   };
@@ -163,7 +176,11 @@ void Seafloor::build_relief(std::uint64_t seed) {
 void Seafloor::build_safe_depth() {
   const int f = std::max(1, static_cast<int>(std::lround(kCoarseStepM / options_.resolution_m)));
   const int cnx = (nx_ + f - 1) / f, cny = (ny_ + f - 1) / f;
-  safe_ = {extent_.x_min_m, extent_.y_min_m, f * options_.resolution_m, cnx, cny,
+  safe_ = {extent_.x_min_m,
+           extent_.y_min_m,
+           f * options_.resolution_m,
+           cnx,
+           cny,
            std::vector<float>(static_cast<std::size_t>(cnx) * cny, 1e9f)};
   for (int iy = 0; iy < ny_; ++iy)
     for (int ix = 0; ix < nx_; ++ix) {

@@ -1,12 +1,11 @@
 #include "nav/sim/sensor_streams.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 #include <string>
-
-#include <Eigen/Geometry>
 
 #include "nav/core/geometry/rotation.h"
 #include "nav/drivers/codecs/altimeter.h"
@@ -18,11 +17,11 @@
 namespace nav::sim {
 namespace {
 
-constexpr std::int64_t kDvlPeriodUs = 200000;       // 5 Hz
-constexpr std::int64_t kHeadingPeriodUs = 100000;   // 10 Hz
-constexpr std::int64_t kDepthPeriodUs = 500000;     // 2 Hz
-constexpr std::int64_t kAltimeterPeriodUs = 200000; // 5 Hz
-constexpr std::int64_t kAltimeterOffsetUs = 100000; // altimeter pings between DVL pings
+constexpr std::int64_t kDvlPeriodUs = 200000;        // 5 Hz
+constexpr std::int64_t kHeadingPeriodUs = 100000;    // 10 Hz
+constexpr std::int64_t kDepthPeriodUs = 500000;      // 2 Hz
+constexpr std::int64_t kAltimeterPeriodUs = 200000;  // 5 Hz
+constexpr std::int64_t kAltimeterOffsetUs = 100000;  // altimeter pings between DVL pings
 constexpr std::int64_t kDepthOffsetUs = 250000;
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr double kBeamAngleRad = 30.0 * std::numbers::pi / 180.0;
@@ -81,8 +80,9 @@ double unesco1983_sea_pressure_dbar(double depth_m, double latitude_rad) {
   double p = depth_m / 0.9945;  // ~1.0055 dbar per metre at mid depths
   for (int i = 0; i < 20; ++i) {
     const double f = drivers::unesco1983_depth_m(p, latitude_rad) - depth_m;
-    const double dfdp =
-        (drivers::unesco1983_depth_m(p + 0.01, latitude_rad) - drivers::unesco1983_depth_m(p - 0.01, latitude_rad)) / 0.02;
+    const double dfdp = (drivers::unesco1983_depth_m(p + 0.01, latitude_rad) -
+                         drivers::unesco1983_depth_m(p - 0.01, latitude_rad)) /
+                        0.02;
     p -= f / dfdp;
     if (std::abs(f) < 1e-10) break;
   }
@@ -92,10 +92,14 @@ double unesco1983_sea_pressure_dbar(double depth_m, double latitude_rad) {
 SensorStreams::SensorStreams(const daemon::NavdConfig& config, const SensorErrorOptions& errors,
                              const Seafloor& seafloor, double dive_duration_s, std::uint64_t seed)
     : errors_(errors), seafloor_(&seafloor) {
-  dvl_ = {&require_sensor(config, daemon::SensorType::kDvlPd0), std::mt19937_64(derive_seed(seed, 11))};
-  heading_ = {&require_sensor(config, daemon::SensorType::kHeadingNmea), std::mt19937_64(derive_seed(seed, 12))};
-  depth_ = {&require_sensor(config, daemon::SensorType::kPressureParo), std::mt19937_64(derive_seed(seed, 13))};
-  altimeter_ = {&require_sensor(config, daemon::SensorType::kAltimeter), std::mt19937_64(derive_seed(seed, 14))};
+  dvl_ = {&require_sensor(config, daemon::SensorType::kDvlPd0),
+          std::mt19937_64(derive_seed(seed, 11))};
+  heading_ = {&require_sensor(config, daemon::SensorType::kHeadingNmea),
+              std::mt19937_64(derive_seed(seed, 12))};
+  depth_ = {&require_sensor(config, daemon::SensorType::kPressureParo),
+            std::mt19937_64(derive_seed(seed, 13))};
+  altimeter_ = {&require_sensor(config, daemon::SensorType::kAltimeter),
+                std::mt19937_64(derive_seed(seed, 14))};
   // Bottom-lock losses: spread over the dive, one per equal share, away from the start.
   std::mt19937_64 rng(derive_seed(seed, 15));
   const int n = errors.dvl_dropouts_per_hour <= 0.0
@@ -106,7 +110,8 @@ SensorStreams::SensorStreams(const daemon::NavdConfig& config, const SensorError
     const double share = dive_duration_s / n;
     std::uniform_real_distribution<double> len(errors.dvl_dropout_min_s, errors.dvl_dropout_max_s);
     const double length = len(rng);
-    std::uniform_real_distribution<double> at(0.2 * share, std::max(0.2 * share, 0.9 * share - length));
+    std::uniform_real_distribution<double> at(0.2 * share,
+                                              std::max(0.2 * share, 0.9 * share - length));
     const double start = i * share + at(rng);
     dropouts_.push_back({start, start + length});
   }
@@ -136,13 +141,15 @@ void SensorStreams::sample(std::int64_t t_us, const core::Vec12& x, std::vector<
   if (due(t_us, kAltimeterPeriodUs, kAltimeterOffsetUs)) sample_altimeter(t_us, x, out);
 }
 
-void SensorStreams::sample_dvl(std::int64_t t_us, const core::Vec12& x, std::vector<RawEvent>& out) {
+void SensorStreams::sample_dvl(std::int64_t t_us, const core::Vec12& x,
+                               std::vector<RawEvent>& out) {
   const daemon::SensorConfig& cfg = *dvl_.config;
   const core::Mat3 R_world_body = core::rotation_from_euler(x.segment<3>(3));
   const core::Mat3 R_body_dvl = mount_rotation(cfg.mount);
   const core::Vec3 lever = lever_arm(cfg.mount);
   // Velocity over ground of the DVL's own location, in the DVL (instrument) frame.
-  const core::Vec3 v_dvl = R_body_dvl.transpose() * (x.segment<3>(6) + x.segment<3>(9).cross(lever));
+  const core::Vec3 v_dvl =
+      R_body_dvl.transpose() * (x.segment<3>(6) + x.segment<3>(9).cross(lever));
   const core::Vec3 p_dvl = x.head<3>() + R_world_body * lever;
 
   drivers::Pd0Ensemble e;
@@ -170,14 +177,14 @@ void SensorStreams::sample_dvl(std::int64_t t_us, const core::Vec12& x, std::vec
                             2.0 * std::numbers::pi);
   e.pitch_rad = rpy_dvl[1] + gauss(dvl_, 0.2 * kDegToRad);
   e.roll_rad = rpy_dvl[0] + gauss(dvl_, 0.2 * kDegToRad);
-  e.pressure_dbar = unesco1983_sea_pressure_dbar(p_dvl.z(), depth_.config->pressure.latitude_deg * std::numbers::pi / 180.0);
+  e.pressure_dbar = unesco1983_sea_pressure_dbar(
+      p_dvl.z(), depth_.config->pressure.latitude_deg * std::numbers::pi / 180.0);
 
   drivers::Pd0BottomTrack bt;
   bt.pings_per_ensemble = 1;
   const double t_s = (t_us - kDiveStartMonotonicUs) * 1e-6;
-  const bool locked = std::none_of(dropouts_.begin(), dropouts_.end(), [&](const auto& d) {
-    return t_s >= d.first && t_s < d.second;
-  });
+  const bool locked = std::none_of(dropouts_.begin(), dropouts_.end(),
+                                   [&](const auto& d) { return t_s >= d.first && t_s < d.second; });
   ++counts_.dvl_ensembles;
   const double sigma = cfg.noise.velocity_mps;
   const double scale = 1.0 + errors_.dvl_scale_error;
@@ -186,17 +193,19 @@ void SensorStreams::sample_dvl(std::int64_t t_us, const core::Vec12& x, std::vec
   const double error_velocity = gauss(dvl_, 0.3 * sigma);
   if (locked) {
     // PD0 bottom track is the bottom relative to the instrument: minus the DVL's velocity.
-    for (int i = 0; i < 3; ++i) bt.velocity_mps[static_cast<std::size_t>(i)] = -(scale * v_dvl[i] + noise[i]);
+    for (int i = 0; i < 3; ++i)
+      bt.velocity_mps[static_cast<std::size_t>(i)] = -(scale * v_dvl[i] + noise[i]);
     bt.velocity_mps[3] = error_velocity;
     const core::Mat3 R_world_dvl = R_world_body * R_body_dvl;
     for (int b = 0; b < 4; ++b) {  // vertical range below each beam's spot on the seafloor
       const double az = b * std::numbers::pi / 2.0;
-      const core::Vec3 dir_world = R_world_dvl * core::Vec3(std::sin(kBeamAngleRad) * std::cos(az),
-                                                            std::sin(kBeamAngleRad) * std::sin(az),
-                                                            std::cos(kBeamAngleRad));
+      const core::Vec3 dir_world =
+          R_world_dvl * core::Vec3(std::sin(kBeamAngleRad) * std::cos(az),
+                                   std::sin(kBeamAngleRad) * std::sin(az), std::cos(kBeamAngleRad));
       const double guess = seafloor_->depth_m(p_dvl.x(), p_dvl.y()) - p_dvl.z();
       const double reach = guess / std::max(0.3, dir_world.z());
-      const double floor = seafloor_->depth_m(p_dvl.x() + reach * dir_world.x(), p_dvl.y() + reach * dir_world.y());
+      const double floor =
+          seafloor_->depth_m(p_dvl.x() + reach * dir_world.x(), p_dvl.y() + reach * dir_world.y());
       bt.range_m[static_cast<std::size_t>(b)] = std::max(0.5, floor - p_dvl.z());
       bt.correlation[static_cast<std::size_t>(b)] = 230;
       bt.eval_amplitude[static_cast<std::size_t>(b)] = 160;
@@ -209,14 +218,16 @@ void SensorStreams::sample_dvl(std::int64_t t_us, const core::Vec12& x, std::vec
   out.push_back({host_time(dvl_, t_us), cfg.name, drivers::encode_pd0(e)});
 }
 
-void SensorStreams::sample_heading(std::int64_t t_us, const core::Vec12& x, std::vector<RawEvent>& out) {
+void SensorStreams::sample_heading(std::int64_t t_us, const core::Vec12& x,
+                                   std::vector<RawEvent>& out) {
   const daemon::SensorConfig& cfg = *heading_.config;
   // The Octans is aligned with the body (its mount rotation is taken into account if set).
   const core::Mat3 R_world_sensor =
       core::rotation_from_euler(x.segment<3>(3)) * mount_rotation(cfg.mount);
   const core::Vec3 rpy = core::euler_from_rotation(R_world_sensor);
   drivers::NmeaHeading h;
-  h.heading_rad = core::wrap_angle(rpy[2] + errors_.heading_bias_rad + gauss(heading_, cfg.noise.heading_rad));
+  h.heading_rad =
+      core::wrap_angle(rpy[2] + errors_.heading_bias_rad + gauss(heading_, cfg.noise.heading_rad));
   drivers::NmeaAttitude a;
   a.roll_rad = rpy[0] + errors_.roll_pitch_bias_rad + gauss(heading_, cfg.noise.roll_pitch_rad);
   a.pitch_rad = rpy[1] + errors_.roll_pitch_bias_rad + gauss(heading_, cfg.noise.roll_pitch_rad);
@@ -231,26 +242,43 @@ void SensorStreams::sample_heading(std::int64_t t_us, const core::Vec12& x, std:
   ++counts_.attitude_sentences;
 }
 
-void SensorStreams::sample_depth(std::int64_t t_us, const core::Vec12& x, std::vector<RawEvent>& out) {
+void SensorStreams::sample_depth(std::int64_t t_us, const core::Vec12& x,
+                                 std::vector<RawEvent>& out) {
   const daemon::SensorConfig& cfg = *depth_.config;
-  const core::Vec3 p = x.head<3>() + core::rotation_from_euler(x.segment<3>(3)) * lever_arm(cfg.mount);
+  const core::Vec3 p =
+      x.head<3>() + core::rotation_from_euler(x.segment<3>(3)) * lever_arm(cfg.mount);
   const double depth = p.z() + errors_.depth_bias_m + gauss(depth_, cfg.noise.depth_m);
   const double lat_rad = cfg.pressure.latitude_deg * std::numbers::pi / 180.0;
   drivers::ParoRecord r;
   r.destination_id = 0;
   r.source_id = 1;
-  r.pressure_pa = (unesco1983_sea_pressure_dbar(depth, lat_rad) + cfg.pressure.surface_pressure_dbar) *
-                  drivers::kPascalPerDecibar;
-  out.push_back({host_time(depth_, t_us), cfg.name, bytes_of(drivers::encode_paro_reply(r, {}, 4))});
+  r.pressure_pa =
+      (unesco1983_sea_pressure_dbar(depth, lat_rad) + cfg.pressure.surface_pressure_dbar) *
+      drivers::kPascalPerDecibar;
+  out.push_back(
+      {host_time(depth_, t_us), cfg.name, bytes_of(drivers::encode_paro_reply(r, {}, 4))});
   ++counts_.depth_replies;
 }
 
-void SensorStreams::sample_altimeter(std::int64_t t_us, const core::Vec12& x, std::vector<RawEvent>& out) {
+void SensorStreams::sample_altimeter(std::int64_t t_us, const core::Vec12& x,
+                                     std::vector<RawEvent>& out) {
   const daemon::SensorConfig& cfg = *altimeter_.config;
-  const core::Vec3 p = x.head<3>() + core::rotation_from_euler(x.segment<3>(3)) * lever_arm(cfg.mount);
+  const core::Mat3 R_world_body = core::rotation_from_euler(x.segment<3>(3));
+  const core::Vec3 p = x.head<3>() + R_world_body * lever_arm(cfg.mount);
+  // Range along the sensor's z axis (down in the body unless mounted otherwise) to the height
+  // field: fixed point from the seafloor straight below.
+  const core::Vec3 axis = R_world_body * mount_rotation(cfg.mount) * core::Vec3::UnitZ();
+  double range = seafloor_->depth_m(p.x(), p.y()) - p.z();
+  if (axis.z() > 0.2) {
+    for (int k = 0; k < 4; ++k) {
+      const core::Vec3 q = p + (range / axis.z()) * axis;
+      range = seafloor_->depth_m(q.x(), q.y()) - p.z();
+    }
+    range /= axis.z();
+  }
   drivers::AltimeterRecord r;
-  r.raw_value_m = std::max(0.1, seafloor_->depth_m(p.x(), p.y()) - p.z() + errors_.altitude_bias_m +
-                                    gauss(altimeter_, cfg.noise.altitude_m));
+  r.raw_value_m =
+      std::max(0.1, range + errors_.altitude_bias_m + gauss(altimeter_, cfg.noise.altitude_m));
   out.push_back({host_time(altimeter_, t_us), cfg.name, bytes_of(drivers::encode_altimeter(r))});
   ++counts_.altimeter_lines;
 }

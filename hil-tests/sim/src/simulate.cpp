@@ -6,17 +6,16 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <stdexcept>
 
+#include "dive_files.h"
 #include "nav/core/geometry/pose.h"
 #include "nav/core/geometry/rotation.h"
 #include "nav/daemon/dive_log.h"
 #include "nav/sim/geometry2d.h"
 #include "nav/sim/renderer.h"
-
-#include <opencv2/imgcodecs.hpp>
-#include "dive_files.h"
 
 namespace nav::sim {
 namespace {
@@ -26,7 +25,8 @@ namespace fs = std::filesystem;
 const daemon::SensorConfig& camera_sensor(const daemon::NavdConfig& config) {
   for (const daemon::SensorConfig& s : config.sensors)
     if (daemon::is_camera(s.type)) return s;
-  throw std::invalid_argument("simulator: the config has no camera sensor (camera_gige or camera_v4l2)");
+  throw std::invalid_argument(
+      "simulator: the config has no camera sensor (camera_gige or camera_v4l2)");
 }
 
 nlohmann::json options_json(const SimOptions& o, const daemon::NavdConfig& config) {
@@ -104,8 +104,9 @@ SimSummary simulate_dive(const SimOptions& o, const daemon::NavdConfig& config,
                          const std::string& config_yaml) {
   if (!(o.tick_hz >= 10.0 && o.tick_hz <= 1000.0) || std::fmod(1e6 / o.tick_hz, 1.0) != 0.0 ||
       50000 % static_cast<std::int64_t>(1e6 / o.tick_hz) != 0)
-    throw std::invalid_argument("SimOptions.tick_hz: " + std::to_string(o.tick_hz) +
-                                " must give a whole number of µs dividing 50 ms (20, 40, 100 Hz ...)");
+    throw std::invalid_argument(
+        "SimOptions.tick_hz: " + std::to_string(o.tick_hz) +
+        " must give a whole number of µs dividing 50 ms (20, 40, 100 Hz ...)");
   if (!(o.oracle.outlier_rate >= 0.0 && o.oracle.outlier_rate <= 1.0))
     throw std::invalid_argument("SimOptions.oracle.outlier_rate: outside [0, 1]");
   if (o.out_dir.empty()) throw std::invalid_argument("SimOptions.out_dir: empty");
@@ -127,8 +128,8 @@ SimSummary simulate_dive(const SimOptions& o, const daemon::NavdConfig& config,
 
   Guidance guidance(mission);
   const double z0 = seafloor.safe_depth_m(0.0, 0.0) - o.mission.altitude_m;
-  Vehicle vehicle(core::Vec3(0.0, 0.0, z0), std::numbers::pi / 2.0, o.mission.speed_mps,
-                  o.vehicle, derive_seed(o.seed, 3));
+  Vehicle vehicle(core::Vec3(0.0, 0.0, z0), std::numbers::pi / 2.0, o.mission.speed_mps, o.vehicle,
+                  derive_seed(o.seed, 3));
   std::mt19937_64 camera_rng(derive_seed(o.seed, 4));
 
   SimSummary sum;
@@ -165,12 +166,14 @@ SimSummary simulate_dive(const SimOptions& o, const daemon::NavdConfig& config,
       altitude_sum += altitude;
       if (last_image_us >= 0) {
         const double gap_s = (t_us - last_image_us) * 1e-6;
-        if (camera_was_off && sum.first_frame_after_transit < 0) sum.first_frame_after_transit = frame;
+        if (camera_was_off && sum.first_frame_after_transit < 0)
+          sum.first_frame_after_transit = frame;
         sum.max_time_gap_between_images_s = std::max(sum.max_time_gap_between_images_s, gap_s);
       }
       last_image_us = t_us;
       camera_was_off = false;
-      const double latency_us = camera_cfg.latency_s * 1e6 +
+      const double latency_us =
+          camera_cfg.latency_s * 1e6 +
           std::uniform_real_distribution<double>(0.0, o.sensor_errors.jitter_ms * 1e3)(camera_rng);
       const std::int64_t host_us = t_us + std::llround(latency_us);
       if (o.render_images) {
@@ -189,16 +192,19 @@ SimSummary simulate_dive(const SimOptions& o, const daemon::NavdConfig& config,
       OracleImage img{frame, t_us, x, {}};
       const core::Vec6 x_wc = core::head_to_tail(x.head<6>(), camera.x_body_camera);
       img.footprint = image_footprint(camera, x, seafloor.depth_m(x_wc[0], x_wc[1]));
-      for (navlcm::registration_t& r : oracle.add_image(img)) files.registration(host_us, std::move(r));
+      for (navlcm::registration_t& r : oracle.add_image(img))
+        files.registration(host_us, std::move(r));
       if (2 * sum.images >= o.mission.images) guidance.request_transit();
-      if (sum.images == o.mission.images) end_us = t_us + 2 * 1000000;  // sensors cover the last image
+      if (sum.images == o.mission.images)
+        end_us = t_us + 2 * 1000000;  // sensors cover the last image
     }
     if (!cmd.camera_on) camera_was_off = true;
     if (cmd.finished && end_us < 0) end_us = t_us;  // ran out of lines (should not happen)
 
     const double depth_cmd = seafloor.safe_depth_m(x[0], x[1]) - o.mission.altitude_m;
     const double heading_error = core::wrap_angle(cmd.heading_rad - x[5]);
-    vehicle.step({cmd.heading_rad, surge_command(o, heading_error, depth_cmd - x[2]), depth_cmd}, dt_s);
+    vehicle.step({cmd.heading_rad, surge_command(o, heading_error, depth_cmd - x[2]), depth_cmd},
+                 dt_s);
 
     if (o.progress) {
       const int pct = static_cast<int>(100.0 * sum.images / o.mission.images);

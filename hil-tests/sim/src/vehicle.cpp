@@ -35,8 +35,8 @@ Vehicle::Vehicle(const core::Vec3& p_world_m, double heading_rad, double surge_m
 void Vehicle::step(const VehicleCommand& cmd, double dt_s) {
   // Heading: yaw-rate command from the heading error, first-order yaw-rate response.
   const double err = core::wrap_angle(cmd.heading_rad - heading_rad_);
-  const double rate_cmd = std::clamp(o_.heading_gain_per_s * err, -o_.max_yaw_rate_rad_s,
-                                     o_.max_yaw_rate_rad_s);
+  const double rate_cmd =
+      std::clamp(o_.heading_gain_per_s * err, -o_.max_yaw_rate_rad_s, o_.max_yaw_rate_rad_s);
   const double yaw_accel = (rate_cmd - yaw_rate_) / o_.yaw_rate_time_constant_s;
   yaw_rate_ += yaw_accel * dt_s;
   heading_rad_ = core::wrap_angle(heading_rad_ + yaw_rate_ * dt_s);

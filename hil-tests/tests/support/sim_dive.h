@@ -35,9 +35,9 @@ inline std::filesystem::path scratch_dir(const std::string& name) {
 struct ScratchCleanup : ::testing::Environment {
   void TearDown() override {
     std::error_code ignored;
-    std::filesystem::remove_all(std::filesystem::temp_directory_path() /
-                                    ("nav_sim_test_" + std::to_string(::getpid())),
-                                ignored);
+    std::filesystem::remove_all(
+        std::filesystem::temp_directory_path() / ("nav_sim_test_" + std::to_string(::getpid())),
+        ignored);
   }
 };
 

@@ -14,12 +14,12 @@
 namespace nav::sim {
 
 struct MissionOptions {
-  int images = 866;              ///< the dive ends after this many images
-  double image_period_s = 8.0;   ///< one image every 8 s while the camera is on
-  double speed_mps = 0.5;        ///< commanded speed on the track lines
-  double line_length_m = 40.0;   ///< athwartships track line length
-  double line_spacing_m = 1.4;   ///< distance between neighbouring lines
-  double altitude_m = 4.0;       ///< vehicle reference point above the safe relief depth
+  int images = 866;             ///< the dive ends after this many images
+  double image_period_s = 8.0;  ///< one image every 8 s while the camera is on
+  double speed_mps = 0.5;       ///< commanded speed on the track lines
+  double line_length_m = 40.0;  ///< athwartships track line length
+  double line_spacing_m = 1.4;  ///< distance between neighbouring lines
+  double altitude_m = 4.0;      ///< vehicle reference point above the safe relief depth
   /// Empty when valid, else the field and the reason.
   [[nodiscard]] const char* validate() const;
 };
@@ -31,11 +31,11 @@ struct Waypoint {
 };
 
 struct Mission {
-  std::vector<Waypoint> waypoints;  ///< waypoints[0] is the start (0, 0)
+  std::vector<Waypoint> waypoints;          ///< waypoints[0] is the start (0, 0)
   double wreck_x_m = 0.0, wreck_y_m = 0.0;  ///< midship, keel along x
-  GridExtent extent;                 ///< area the seafloor must cover
-  int stern_lines = 0, bow_lines = 0;  ///< planned (generous: see Guidance::request_transit)
-  std::size_t transit_end = 0;         ///< waypoint index where the camera-off transit ends
+  GridExtent extent;                        ///< area the seafloor must cover
+  int stern_lines = 0, bow_lines = 0;       ///< planned (generous: see Guidance::request_transit)
+  std::size_t transit_end = 0;              ///< waypoint index where the camera-off transit ends
 };
 
 /// Plans twice the lines `images` images need at the commanded speed on each leg (the
@@ -50,7 +50,7 @@ class Guidance {
   struct Command {
     double heading_rad = 0.0;  ///< desired heading
     bool camera_on = true;
-    bool finished = false;     ///< past the last waypoint
+    bool finished = false;  ///< past the last waypoint
   };
   /// Advances past reached segments and returns the command at world position x, y.
   Command update(double x_m, double y_m);

@@ -6,13 +6,12 @@
 // (config camera mount) of the TRUE states plus noise drawn from the stated covariance; a
 // fraction of the successes are outliers (reversed baseline direction, wrong relative heading).
 
+#include <Eigen/Core>
 #include <cstdint>
+#include <navlcm/registration_t.hpp>
 #include <optional>
 #include <random>
 #include <vector>
-
-#include <Eigen/Core>
-#include <navlcm/registration_t.hpp>
 
 #include "nav/core/geometry/types.h"
 #include "nav/core/models/binary_models.h"
@@ -25,13 +24,13 @@ using Mat5 = Eigen::Matrix<double, 5, 5>;
 using Vec5 = Eigen::Matrix<double, 5, 1>;
 
 struct OracleOptions {
-  double azimuth_sigma_rad = 0.017453292519943295;     ///< 1 deg, baseline azimuth
-  double elevation_sigma_rad = 0.017453292519943295;   ///< 1 deg, baseline elevation
-  double rotation_sigma_rad = 0.003490658503988659;    ///< 0.2 deg, relative roll/pitch/heading
-  double outlier_rate = 0.05;        ///< fraction of successful registrations that are outliers
-  double min_overlap = 0.02;         ///< pairs overlapping less are not tried at all
-  double overlap_zero = 0.15;        ///< success probability 0 at or below this overlap
-  double overlap_full = 0.60;        ///< ... rising linearly to its maximum at this overlap
+  double azimuth_sigma_rad = 0.017453292519943295;    ///< 1 deg, baseline azimuth
+  double elevation_sigma_rad = 0.017453292519943295;  ///< 1 deg, baseline elevation
+  double rotation_sigma_rad = 0.003490658503988659;   ///< 0.2 deg, relative roll/pitch/heading
+  double outlier_rate = 0.05;  ///< fraction of successful registrations that are outliers
+  double min_overlap = 0.02;   ///< pairs overlapping less are not tried at all
+  double overlap_zero = 0.15;  ///< success probability 0 at or below this overlap
+  double overlap_full = 0.60;  ///< ... rising linearly to its maximum at this overlap
   double max_success_probability = 0.95;
   double time_gap_scale_s = 1800.0;  ///< long gaps lose up to 70 % of the success probability
 };
@@ -52,7 +51,7 @@ Polygon2 image_footprint(const CameraGeometry& camera, const core::Vec12& x_true
 
 struct OracleImage {
   std::int64_t frame_id = 0;
-  std::int64_t t_us = 0;        ///< time of validity (monotonic)
+  std::int64_t t_us = 0;  ///< time of validity (monotonic)
   core::Vec12 x_true = core::Vec12::Zero();
   Polygon2 footprint;
 };

@@ -8,9 +8,8 @@
 // strobe -> seafloor -> camera; cos^4 vignetting; shot and read noise; 12 significant bits.
 
 #include <cstdint>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "nav/core/geometry/types.h"
 #include "nav/sim/oracle.h"
@@ -20,10 +19,10 @@ namespace nav::sim {
 
 struct RenderOptions {
   core::Vec3 strobe_in_camera_m{0.0, -0.8, 0.0};  ///< strobe 0.8 m "up" in the image (aft)
-  double attenuation_per_m = 0.25;     ///< sea-water extinction coefficient, 1/m
-  double target_counts = 1500.0;       ///< auto exposure: mean-albedo floor at the nadir
-  double read_noise_counts = 3.0;      ///< 1 sigma
-  double counts_per_electron = 0.25;   ///< shot noise: sqrt(signal / gain) electrons
+  double attenuation_per_m = 0.25;                ///< sea-water extinction coefficient, 1/m
+  double target_counts = 1500.0;                  ///< auto exposure: mean-albedo floor at the nadir
+  double read_noise_counts = 3.0;                 ///< 1 sigma
+  double counts_per_electron = 0.25;              ///< shot noise: sqrt(signal / gain) electrons
   int thumbnail_width_px = 160;
 };
 

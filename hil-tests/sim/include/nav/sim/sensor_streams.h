@@ -4,8 +4,8 @@
 // iXblue Octans $HEHDT + $PHTRO (10 Hz), Paroscientific pressure replies in psia (2 Hz),
 // Tritech PA500 altimeter lines (5 Hz). Measurements come from the truth through the config's
 // mounts (the DVL measures the velocity of its own location in its own frame; the depth sensor
-// the depth of its lever arm; the altimeter the seafloor below its lever arm) with the config's
-// noise sigmas, optional small biases, DVL bottom-lock dropouts, and host times = time of
+// the depth of its lever arm; the altimeter the range along its axis to the seafloor) with the
+// config's noise sigmas, optional small biases, DVL bottom-lock dropouts, and host times = time of
 // validity + the sensor's config latency + jitter. The PD0 RTC is the DVL's own clock: true
 // UTC + an offset + a drift.
 
@@ -30,17 +30,17 @@ inline std::int64_t realtime_of(std::int64_t monotonic_us) {
 
 /// Sensor errors beyond white noise. Defaults are small; every one may be set to 0.
 struct SensorErrorOptions {
-  double dvl_scale_error = 0.001;          ///< velocity scale factor error (0.1 %)
-  double heading_bias_rad = 0.0008726646;  ///< 0.05 deg added to every heading
+  double dvl_scale_error = 0.001;            ///< velocity scale factor error (0.1 %)
+  double heading_bias_rad = 0.0008726646;    ///< 0.05 deg added to every heading
   double roll_pitch_bias_rad = 0.000349066;  ///< 0.02 deg added to roll and pitch
-  double depth_bias_m = 0.02;              ///< pressure-sensor offset, expressed in depth
+  double depth_bias_m = 0.02;                ///< pressure-sensor offset, expressed in depth
   double altitude_bias_m = 0.0;
-  double dvl_clock_offset_s = 0.37;        ///< DVL RTC minus true UTC at the dive start
-  double dvl_clock_drift_ppm = 20.0;       ///< DVL RTC rate error
-  double dvl_dropouts_per_hour = 1.5;      ///< bottom-lock losses (at least one if > 0)
+  double dvl_clock_offset_s = 0.37;    ///< DVL RTC minus true UTC at the dive start
+  double dvl_clock_drift_ppm = 20.0;   ///< DVL RTC rate error
+  double dvl_dropouts_per_hour = 1.5;  ///< bottom-lock losses (at least one if > 0)
   double dvl_dropout_min_s = 10.0, dvl_dropout_max_s = 40.0;
-  double jitter_ms = 2.0;                  ///< host receive jitter, uniform [0, jitter]
-  double serial_baud = 115200.0;           ///< for the gap between back-to-back sentences
+  double jitter_ms = 2.0;         ///< host receive jitter, uniform [0, jitter]
+  double serial_baud = 115200.0;  ///< for the gap between back-to-back sentences
   /// Zero every bias, clock error and dropout (white noise and latency stay).
   static SensorErrorOptions ideal();
 };
@@ -104,7 +104,6 @@ double unesco1983_sea_pressure_dbar(double depth_m, double latitude_rad);
 std::uint64_t derive_seed(std::uint64_t seed, std::uint64_t stream);
 
 /// The first sensor of `type` in the config, or nullptr.
-const daemon::SensorConfig* find_sensor(const daemon::NavdConfig& config,
-                                        daemon::SensorType type);
+const daemon::SensorConfig* find_sensor(const daemon::NavdConfig& config, daemon::SensorType type);
 
 }  // namespace nav::sim

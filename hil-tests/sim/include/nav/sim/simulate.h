@@ -7,9 +7,8 @@
 
 #include <cstdint>
 #include <functional>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "nav/daemon/config.h"
 #include "nav/sim/mission.h"
@@ -22,15 +21,15 @@
 namespace nav::sim {
 
 struct SimOptions {
-  std::string out_dir;            ///< created if missing; existing dive files are overwritten
+  std::string out_dir;  ///< created if missing; existing dive files are overwritten
   std::uint64_t seed = 1;
-  double tick_hz = 20.0;          ///< truth integration rate; a divisor of 20 ms steps: 20 or 40 Hz ...
-  MissionOptions mission;         ///< mission.images: the number of images (default 866)
+  double tick_hz = 20.0;   ///< truth integration rate; a divisor of 20 ms steps: 20 or 40 Hz ...
+  MissionOptions mission;  ///< mission.images: the number of images (default 866)
   VehicleOptions vehicle;
   SeafloorOptions seafloor;
   SensorErrorOptions sensor_errors;
-  OracleOptions oracle;           ///< oracle.outlier_rate: --outlier-rate
-  bool render_images = false;     ///< write images/<frame %06d>.png (renderer.h), thumbnails
+  OracleOptions oracle;        ///< oracle.outlier_rate: --outlier-rate
+  bool render_images = false;  ///< write images/<frame %06d>.png (renderer.h), thumbnails
   RenderOptions render;
   /// Called now and then with the fraction of the dive simulated, in [0, 1].
   std::function<void(double)> progress;
@@ -42,8 +41,8 @@ struct SimSummary {
   std::int64_t registrations = 0;
   std::int64_t registrations_succeeded = 0;
   std::int64_t outliers_injected = 0;
-  double track_length_m = 0.0;         ///< 3-D path length of the whole dive
-  double survey_hull_area_m2 = 0.0;    ///< convex hull of the track while the camera is on
+  double track_length_m = 0.0;       ///< 3-D path length of the whole dive
+  double survey_hull_area_m2 = 0.0;  ///< convex hull of the track while the camera is on
   double duration_s = 0.0;
   std::int64_t truth_samples = 0;
   std::int64_t log_events = 0;
@@ -52,7 +51,7 @@ struct SimSummary {
   std::int64_t first_frame_after_transit = -1;
   SensorCounts sensors;
   std::int64_t degenerate_pairs_skipped = 0;
-  nlohmann::json options;  ///< what sim.json records under "options"
+  nlohmann::json options;          ///< what sim.json records under "options"
   nlohmann::json to_json() const;  ///< sim.json's content
 };
 

@@ -19,15 +19,15 @@ struct VehicleOptions {
   double sway_time_constant_s = 3.0;
   double heave_time_constant_s = 2.0;
   double yaw_rate_time_constant_s = 1.5;
-  double heading_gain_per_s = 0.4;        ///< yaw rate command per rad of heading error
-  double max_yaw_rate_rad_s = 0.17;       ///< ~10 deg/s
-  double depth_gain_per_s = 0.35;         ///< heave command per m of depth error
+  double heading_gain_per_s = 0.4;   ///< yaw rate command per rad of heading error
+  double max_yaw_rate_rad_s = 0.17;  ///< ~10 deg/s
+  double depth_gain_per_s = 0.35;    ///< heave command per m of depth error
   double max_heave_mps = 0.5;
   double roll_period_s = 7.0, pitch_period_s = 9.0, attitude_damping = 0.15;
   double roll_sigma_rad = 0.012, pitch_sigma_rad = 0.010;  ///< steady oscillation (~0.7 deg)
   double pitch_trim_rad = 0.02;
-  double current_mean_mps = 0.03;    ///< mean current speed (random direction from the seed)
-  double current_sigma_mps = 0.02;   ///< OU standard deviation per axis
+  double current_mean_mps = 0.03;   ///< mean current speed (random direction from the seed)
+  double current_sigma_mps = 0.02;  ///< OU standard deviation per axis
   double current_time_constant_s = 600.0;
 };
 
