@@ -344,6 +344,10 @@ Status restore_recovery(const SectionSet& sections, int num_blocks, StateRecover
     return s;
   }
   if (Status s = r.expect_end(); !s.ok()) return s;
+  if (X.rows() == 0) {  // an uninitialised filter: a recovery that has not started either
+    *recovery = StateRecovery(d, recovery->options());
+    return Status::Ok();
+  }
   return recovery->set_solution(X);
 }
 

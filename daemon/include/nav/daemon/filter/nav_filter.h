@@ -143,6 +143,7 @@ class NavFilter {
   const ImageRecord* image_of_state(int block) const;
 
  private:
+  friend struct NavFilterCheckpointAccess;  // checkpoints: nav_filter_checkpoint.cpp
   struct Proposal {
     core::LinkProposal joint;
     std::size_t image = 0;  ///< index into images_

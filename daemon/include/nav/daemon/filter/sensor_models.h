@@ -59,6 +59,7 @@ class SensorModels {
   double footprint_radius_per_altitude() const { return footprint_per_altitude_; }
 
  private:
+  friend struct NavFilterCheckpointAccess;  // checkpoints: nav_filter_checkpoint.cpp
   struct Sensor {
     std::string name;
     core::Mat3 R_body_sensor = core::Mat3::Identity();

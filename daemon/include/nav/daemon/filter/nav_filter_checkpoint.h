@@ -1,0 +1,33 @@
+#pragma once
+// Checkpoints of the NavFilter (issue "navd" §6): the map sections of core/serialization
+// (ESDF, BNDS, RCVY) plus the "NAVF" section with everything else the filter carries between
+// measurements, so that a filter restored from a checkpoint and fed the same further
+// measurements stays bit-identical to the original:
+//   initialisation state (seen attitude/heading/depth), time, the warm-start extension since the
+//   last recovery (A, P_robot, Σ_tt, flags, kept block), the pending image and its links, the
+//   altitude in use, block -> image map, image records (trajectory), link history, proposal
+//   records, counters, and each attitude sensor's last angles (SensorModels).
+// Section "NAVF", version 1, little-endian (core/serialization/byte_io.h); the layout is the
+// order of the fields in nav_filter_checkpoint.cpp's encode(). Decoding checks every count
+// against the bytes present, every index against the filter (blocks, images, links, sensors).
+// The filter to restore into is built from the same config and options first (they are not in
+// the checkpoint: a changed config takes effect on resume); on error it is left unchanged.
+
+#include <cstdint>
+
+#include "nav/core/serialization/sections.h"
+#include "nav/core/status.h"
+#include "nav/daemon/filter/nav_filter.h"
+
+namespace nav::daemon {
+
+inline constexpr std::uint32_t kNavFilterSectionTag = core::section_tag("NAVF");
+inline constexpr std::uint32_t kNavFilterSectionVersion = 1;
+
+/// Adds the ESDF, BNDS, RCVY and NAVF sections.
+core::Status add_nav_filter_sections(const NavFilter& filter, core::SectionWriter* writer);
+
+/// Restores `filter` (built from the checkpoint's config) from the sections, all or nothing.
+core::Status restore_nav_filter(const core::SectionSet& sections, NavFilter* filter);
+
+}  // namespace nav::daemon

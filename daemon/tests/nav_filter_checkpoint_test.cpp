@@ -1,0 +1,136 @@
+// NavFilter checkpoints (filter/nav_filter_checkpoint.h) on the synthetic dive of
+// support/synthetic_dive.h: a filter restored from a checkpoint taken anywhere in the dive
+// (before initialisation, between images, with a pending image) and fed the remaining
+// measurements ends bit-identical to the uninterrupted filter, link history and trajectory
+// included; every 11th truncation of the NAVF section is refused, a flipped byte (every 17th) is refused or
+// decodes to exactly those bytes, and a refused restore leaves the filter untouched.
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <vector>
+
+#include "nav/core/serialization/sections.h"
+#include "nav/daemon/config.h"
+#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/filter/nav_filter_checkpoint.h"
+#include "support/synthetic_dive.h"
+
+namespace nav::daemon {
+namespace {
+
+using Bytes = std::vector<std::uint8_t>;
+
+struct Fixture {
+  Fixture(double duration_s) {
+    config = load_config_file("config/sim.yaml");  // ctest runs in the source directory
+    nav::testing::SyntheticDiveOptions o;
+    o.duration_s = duration_s;
+    dive = nav::testing::make_synthetic_dive(config, o);
+    options = NavFilterOptions::from_config(config);
+  }
+  std::unique_ptr<NavFilter> make() const {
+    return std::make_unique<NavFilter>(config, &dive.registrations, options);
+  }
+  NavdConfig config;
+  nav::testing::SyntheticDive dive;
+  NavFilterOptions options;
+};
+
+Bytes encode(const NavFilter& f) {
+  core::SectionWriter w;
+  EXPECT_TRUE(add_nav_filter_sections(f, &w).ok());
+  return w.finish();
+}
+
+core::Status restore(const Bytes& payload, NavFilter* f, bool verify_crc = true) {
+  core::SectionSet set;
+  if (core::Status s = core::SectionSet::decode(payload, &set, {verify_crc}); !s.ok()) return s;
+  return restore_nav_filter(set, f);
+}
+
+TEST(NavFilterCheckpoint, ResumedFilterEndsBitIdentical) {
+  const Fixture fx(120.0);
+  const auto& ms = fx.dive.measurements;
+  auto reference = fx.make();
+  for (const Measurement& m : ms) ASSERT_TRUE(reference->process(m).ok());
+  ASSERT_TRUE(reference->finish().ok());
+  const Bytes expected = encode(*reference);
+  ASSERT_GT(reference->counters().links_accepted, 20u);
+
+  // Cut points: before initialisation, just after, right after an image (pending), mid-dive,
+  // near the end.
+  std::vector<std::size_t> cuts = {0, 1, 5, ms.size() / 2, ms.size() - 3};
+  for (std::size_t i = 10; i < ms.size(); ++i) {
+    if (std::holds_alternative<ImageEvent>(ms[i]) && i > ms.size() / 3) {
+      cuts.push_back(i + 1);
+      break;
+    }
+  }
+  for (std::size_t cut : cuts) {
+    auto original = fx.make();
+    for (std::size_t i = 0; i < cut; ++i) ASSERT_TRUE(original->process(ms[i]).ok());
+    const Bytes checkpoint = encode(*original);
+    auto resumed = fx.make();
+    const core::Status s = restore(checkpoint, resumed.get());
+    ASSERT_TRUE(s.ok()) << "cut " << cut << ": " << s.to_string();
+    EXPECT_EQ(encode(*resumed), checkpoint) << "cut " << cut;
+    for (std::size_t i = cut; i < ms.size(); ++i) ASSERT_TRUE(resumed->process(ms[i]).ok());
+    ASSERT_TRUE(resumed->finish().ok());
+    EXPECT_EQ(encode(*resumed), expected) << "cut " << cut;
+    EXPECT_EQ(resumed->links().size(), reference->links().size());
+    EXPECT_EQ(resumed->esdf().num_blocks(), reference->esdf().num_blocks());  // no state lost
+  }
+}
+
+TEST(NavFilterCheckpoint, CorruptNavfIsRefusedAndTheFilterUntouched) {
+  const Fixture fx(12.0);  // a few images: small sections, every byte tried quickly
+  auto f = fx.make();
+  for (const Measurement& m : fx.dive.measurements) ASSERT_TRUE(f->process(m).ok());
+  ASSERT_GE(f->images().size(), 4u);
+  const Bytes payload = encode(*f);
+  core::SectionSet set;
+  ASSERT_TRUE(core::SectionSet::decode(payload, &set).ok());
+  const core::SectionView* navf = set.find(kNavFilterSectionTag);
+  ASSERT_NE(navf, nullptr);
+  const Bytes navf_bytes(navf->bytes.begin(), navf->bytes.end());
+  // The map sections as they are, NAVF replaced by `bytes`.
+  auto with_navf = [&](const Bytes& bytes) {
+    core::SectionWriter w;
+    for (const core::SectionView& v : set.sections()) {
+      EXPECT_TRUE(w.add(v.tag, v.version, v.tag == kNavFilterSectionTag ? bytes : Bytes(v.bytes.begin(), v.bytes.end())).ok());
+    }
+    return w.finish();
+  };
+  auto target = fx.make();
+  const Bytes untouched = encode(*target);
+  for (std::size_t len = 0; len < navf_bytes.size(); len += 11) {
+    const Bytes cut(navf_bytes.begin(), navf_bytes.begin() + static_cast<std::ptrdiff_t>(len));
+    ASSERT_FALSE(restore(with_navf(cut), target.get()).ok()) << "NAVF truncated to " << len;
+  }
+  EXPECT_EQ(encode(*target), untouched);
+  int accepted = 0;
+  for (std::size_t i = 0; i < navf_bytes.size(); i += 17) {
+    Bytes bad = navf_bytes;
+    bad[i] ^= 0xFF;
+    auto g = fx.make();
+    if (restore(with_navf(bad), g.get(), false).ok()) {
+      ++accepted;
+      core::SectionSet again;
+      const Bytes re = encode(*g);
+      ASSERT_TRUE(core::SectionSet::decode(re, &again).ok());
+      const core::SectionView* v = again.find(kNavFilterSectionTag);
+      ASSERT_EQ(Bytes(v->bytes.begin(), v->bytes.end()), bad) << "byte " << i;
+    }
+  }
+  EXPECT_GT(accepted, 0);
+  // With the CRC on, the same flip is refused outright, naming the section.
+  Bytes flipped = payload;
+  flipped[static_cast<std::size_t>(navf->offset) + 10] ^= 0x01;
+  const core::Status s = restore(flipped, target.get());
+  EXPECT_NE(s.message().find("CRC-32 mismatch in section NAVF"), std::string::npos)
+      << s.message();
+  EXPECT_EQ(encode(*target), untouched);
+}
+
+}  // namespace
+}  // namespace nav::daemon
