@@ -43,6 +43,37 @@ TEST(SimMission, DefaultDiveIsThePapersSurveyInSize) {
   EXPECT_GT(s.sensors.dvl_invalid_ensembles, 3 * 10 * 5 - 1) << "three dropouts of >= 10 s";
 }
 
+TEST(SimMission, BadOptionsAreRejectedNamingTheField) {
+  auto message_of = [](const SimOptions& o) {
+    try {
+      simulate_dive(o, sim_config_path().string());
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  SimOptions o;
+  o.out_dir = scratch_dir("bad").string();
+  o.oracle.outlier_rate = 1.5;
+  EXPECT_NE(message_of(o).find("SimOptions.oracle.outlier_rate"), std::string::npos)
+      << message_of(o);
+  o.oracle.outlier_rate = 0.05;
+  o.sensor_errors.jitter_ms = -1.0;
+  EXPECT_NE(message_of(o).find("SimOptions.sensor_errors.jitter_ms"), std::string::npos);
+  o.sensor_errors.jitter_ms = 2.0;
+  o.mission.images = 1;
+  EXPECT_NE(message_of(o).find("MissionOptions.images"), std::string::npos);
+  o.mission.images = 10;
+  daemon::NavdConfig no_camera = daemon::load_config_file(sim_config_path().string());
+  no_camera.sensors.pop_back();
+  try {
+    simulate_dive(o, no_camera, "");
+    ADD_FAILURE() << "a config without a camera was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("camera"), std::string::npos) << e.what();
+  }
+}
+
 TEST(SimMission, ConvexGeometry) {
   const Polygon2 square{{0, 0}, {2, 0}, {2, 2}, {0, 2}};
   const Polygon2 shifted{{1, 1}, {3, 1}, {3, 3}, {1, 3}};

@@ -18,6 +18,19 @@ double uniform(std::mt19937_64& rng, double a, double b) {
 
 }  // namespace
 
+std::string OracleOptions::validate() const {
+  for (double s : {azimuth_sigma_rad, elevation_sigma_rad, rotation_sigma_rad})
+    if (!(s > 0.0 && s < 1.0)) return "*_sigma_rad: outside (0, 1) rad";
+  if (!(outlier_rate >= 0.0 && outlier_rate <= 1.0)) return "outlier_rate: outside [0, 1]";
+  if (!(min_overlap >= 0.0 && min_overlap <= 1.0)) return "min_overlap: outside [0, 1]";
+  if (!(overlap_zero >= 0.0 && overlap_zero < overlap_full && overlap_full <= 1.0))
+    return "overlap_zero/overlap_full: need 0 <= zero < full <= 1";
+  if (!(max_success_probability >= 0.0 && max_success_probability <= 1.0))
+    return "max_success_probability: outside [0, 1]";
+  if (!(time_gap_scale_s > 0.0)) return "time_gap_scale_s: must be > 0";
+  return "";
+}
+
 CameraGeometry CameraGeometry::from_config(const daemon::SensorConfig& s) {
   CameraGeometry c;
   c.fx_px = s.camera.fx_px;

@@ -63,6 +63,26 @@ SensorErrorOptions SensorErrorOptions::ideal() {
   return o;
 }
 
+std::string SensorErrorOptions::validate() const {
+  auto finite = [](double v) { return std::isfinite(v); };
+  if (!finite(dvl_scale_error) || std::abs(dvl_scale_error) > 0.1)
+    return "dvl_scale_error: outside [-0.1, 0.1]";
+  for (double b : {heading_bias_rad, roll_pitch_bias_rad})
+    if (!finite(b) || std::abs(b) > 0.2)
+      return "heading/roll_pitch_bias_rad: outside [-0.2, 0.2] rad";
+  if (!finite(depth_bias_m) || !finite(altitude_bias_m)) return "depth/altitude_bias_m: not finite";
+  if (!finite(dvl_clock_offset_s) || !finite(dvl_clock_drift_ppm))
+    return "dvl_clock_offset_s/drift_ppm: not finite";
+  if (!(dvl_dropouts_per_hour >= 0.0 && dvl_dropouts_per_hour <= 100.0))
+    return "dvl_dropouts_per_hour: outside [0, 100]";
+  if (!(dvl_dropout_min_s > 0.0 && dvl_dropout_min_s <= dvl_dropout_max_s &&
+        dvl_dropout_max_s <= 3600.0))
+    return "dvl_dropout_min_s/max_s: need 0 < min <= max <= 3600 s";
+  if (!(jitter_ms >= 0.0 && jitter_ms <= 1000.0)) return "jitter_ms: outside [0, 1000]";
+  if (!(serial_baud >= 300.0)) return "serial_baud: below 300";
+  return "";
+}
+
 std::uint64_t derive_seed(std::uint64_t seed, std::uint64_t stream) {
   std::uint64_t z = seed + 0x9e3779b97f4a7c15ULL * (stream + 1);
   z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;

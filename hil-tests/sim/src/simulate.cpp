@@ -107,8 +107,10 @@ SimSummary simulate_dive(const SimOptions& o, const daemon::NavdConfig& config,
     throw std::invalid_argument(
         "SimOptions.tick_hz: " + std::to_string(o.tick_hz) +
         " must give a whole number of µs dividing 50 ms (20, 40, 100 Hz ...)");
-  if (!(o.oracle.outlier_rate >= 0.0 && o.oracle.outlier_rate <= 1.0))
-    throw std::invalid_argument("SimOptions.oracle.outlier_rate: outside [0, 1]");
+  if (const std::string e = o.oracle.validate(); !e.empty())
+    throw std::invalid_argument("SimOptions.oracle." + e);
+  if (const std::string e = o.sensor_errors.validate(); !e.empty())
+    throw std::invalid_argument("SimOptions.sensor_errors." + e);
   if (o.out_dir.empty()) throw std::invalid_argument("SimOptions.out_dir: empty");
 
   const Mission mission = plan_mission(o.mission);

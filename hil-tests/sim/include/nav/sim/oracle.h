@@ -11,6 +11,7 @@
 #include <navlcm/registration_t.hpp>
 #include <optional>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "nav/core/geometry/types.h"
@@ -33,6 +34,8 @@ struct OracleOptions {
   double overlap_full = 0.60;  ///< ... rising linearly to its maximum at this overlap
   double max_success_probability = 0.95;
   double time_gap_scale_s = 1800.0;  ///< long gaps lose up to 70 % of the success probability
+  /// Empty when usable, else "<field>: <reason>".
+  std::string validate() const;
 };
 
 /// Camera intrinsics and mount from a camera sensor of the config.

@@ -10,6 +10,7 @@
 // UTC + an offset + a drift.
 
 #include <cstdint>
+#include <numbers>
 #include <optional>
 #include <random>
 #include <string>
@@ -30,10 +31,10 @@ inline std::int64_t realtime_of(std::int64_t monotonic_us) {
 
 /// Sensor errors beyond white noise. Defaults are small; every one may be set to 0.
 struct SensorErrorOptions {
-  double dvl_scale_error = 0.001;            ///< velocity scale factor error (0.1 %)
-  double heading_bias_rad = 0.0008726646;    ///< 0.05 deg added to every heading
-  double roll_pitch_bias_rad = 0.000349066;  ///< 0.02 deg added to roll and pitch
-  double depth_bias_m = 0.02;                ///< pressure-sensor offset, expressed in depth
+  double dvl_scale_error = 0.001;  ///< velocity scale factor error (0.1 %)
+  double heading_bias_rad = 0.05 * std::numbers::pi / 180.0;     ///< added to every heading
+  double roll_pitch_bias_rad = 0.02 * std::numbers::pi / 180.0;  ///< added to roll and pitch
+  double depth_bias_m = 0.02;  ///< pressure-sensor offset, expressed in depth
   double altitude_bias_m = 0.0;
   double dvl_clock_offset_s = 0.37;    ///< DVL RTC minus true UTC at the dive start
   double dvl_clock_drift_ppm = 20.0;   ///< DVL RTC rate error
@@ -43,6 +44,8 @@ struct SensorErrorOptions {
   double serial_baud = 115200.0;  ///< for the gap between back-to-back sentences
   /// Zero every bias, clock error and dropout (white noise and latency stay).
   static SensorErrorOptions ideal();
+  /// Empty when usable, else "<field>: <reason>".
+  std::string validate() const;
 };
 
 /// The bytes of one read from a sensor, stamped with the host clocks.
