@@ -5,7 +5,9 @@
 // time, and the restarted child resumes from the newest valid checkpoint, skipping the steps
 // that checkpoint already contains. The final map must equal an uninterrupted run's bit for bit
 // (the steps after the last checkpoint are replayed from the log), with every delayed state.
-// A second test corrupts and truncates the newest checkpoints: they are reported with their
+// The same with navd's NavFilter on the synthetic dive of support/synthetic_dive.h: the child
+// skips the measurements the checkpoint contains by their time of validity (ResumeSkipper).
+// A further test corrupts and truncates the newest checkpoints: they are reported with their
 // reason and skipped, the previous one is resumed, and the result is still bit-identical.
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -28,6 +30,11 @@
 #include "nav/core/sim/survey.h"
 #include "nav/daemon/checkpoint.h"
 #include "nav/daemon/checkpoint_worker.h"
+#include "nav/daemon/config.h"
+#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/filter/nav_filter_checkpoint.h"
+#include "nav/daemon/resume_point.h"
+#include "support/synthetic_dive.h"
 
 namespace nav::daemon {
 namespace {
@@ -323,6 +330,151 @@ TEST_F(CheckpointResume, PayloadThatDoesNotDecodeIsSkippedWithItsReason) {
   ASSERT_EQ(r.skipped.size(), 1u);
   EXPECT_NE(r.skipped[0].reason.find("bad magic (not NAVSECTS)"), std::string::npos)
       << r.skipped[0].reason;
+}
+
+// ---- NavFilter ----------------------------------------------------------------------------
+
+struct FilterDive {
+  FilterDive() {
+    config = load_config_file("config/sim.yaml");  // ctest runs in the source directory
+    nav::testing::SyntheticDiveOptions o;
+    o.duration_s = 120.0;
+    dive = nav::testing::make_synthetic_dive(config, o);
+    options = NavFilterOptions::from_config(config);
+  }
+  std::unique_ptr<NavFilter> make() const {
+    return std::make_unique<NavFilter>(config, &dive.registrations, options);
+  }
+  NavdConfig config;
+  nav::testing::SyntheticDive dive;
+  NavFilterOptions options;
+};
+
+Bytes encode_filter(const NavFilter& f, const ResumePoint* point) {
+  SectionWriter w;
+  (void)add_nav_filter_sections(f, &w);
+  if (point != nullptr) (void)add_resume_section(*point, &w);
+  return w.finish();
+}
+
+/// navd's loop in miniature: resume, skip what the checkpoint holds, filter, checkpoint every
+/// 40 measurements and at the end (the shutdown checkpoint, before finish()), then finish().
+[[noreturn]] void run_filter_child(const FilterDive& fx, const fs::path& dir) {
+  std::unique_ptr<NavFilter> filter = fx.make();
+  ResumePoint point;
+  const LoadResult loaded =
+      load_newest_valid(dir / "checkpoints", [&](const Checkpoint& c) -> std::string {
+        SectionSet set;
+        std::unique_ptr<NavFilter> restored = fx.make();
+        ResumePoint p;
+        if (Status s = SectionSet::decode(c.payload, &set); !s.ok()) return s.to_string();
+        if (Status s = restore_nav_filter(set, restored.get()); !s.ok()) return s.to_string();
+        if (Status s = restore_resume_point(set, &p); !s.ok()) return s.to_string();
+        filter = std::move(restored);
+        point = p;
+        return "";
+      });
+  std::ofstream(dir / "starts.log", std::ios::app)
+      << "start " << point.applied << " skipped " << loaded.skipped.size() << [&] {
+           std::string reasons;
+           for (const SkippedCheckpoint& k : loaded.skipped) {
+             reasons += " [" + k.path.filename().string() + ": " + k.reason + "]";
+           }
+           return reasons;
+         }() << "\n";
+  CheckpointWorker worker(dir / "checkpoints", 3);
+  AppliedTracker tracker(point);
+  ResumeSkipper skipper(point);
+  for (const Measurement& m : fx.dive.measurements) {
+    if (skipper.skip(m)) continue;
+    if (!filter->process(m).ok()) std::_Exit(3);
+    tracker.applied(m);
+    if (tracker.point().applied % 40 == 0) {
+      worker.offer(kPayloadVersion, encode_filter(*filter, &tracker.point()));
+    }
+  }
+  worker.offer(kPayloadVersion, encode_filter(*filter, &tracker.point()));
+  worker.stop();
+  if (!filter->finish().ok()) std::_Exit(4);
+  const Bytes final_map = encode_filter(*filter, nullptr);
+  std::ofstream(dir / "final.tmp", std::ios::binary)
+      .write(reinterpret_cast<const char*>(final_map.data()),
+             static_cast<std::streamsize>(final_map.size()));
+  fs::rename(dir / "final.tmp", dir / "final.bin");
+  std::_Exit(0);
+}
+
+TEST_F(CheckpointResume, NavFilterKilledAtRandomPointsResumesToTheSameMap) {
+  const FilterDive fx;
+  const auto t0 = std::chrono::steady_clock::now();
+  std::unique_ptr<NavFilter> reference = fx.make();
+  for (const Measurement& m : fx.dive.measurements) ASSERT_TRUE(reference->process(m).ok());
+  ASSERT_TRUE(reference->finish().ok());
+  const Bytes expected = encode_filter(*reference, nullptr);
+  const double run_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+
+  std::mt19937 rng(9);
+  int kills = 0;
+  for (int attempt = 0; attempt < 12 && kills < 5; ++attempt) {
+    const pid_t pid = ::fork();
+    if (pid == 0) run_filter_child(fx, dir_);
+    std::uniform_real_distribution<double> when_ms(0.2 * run_ms, 1.2 * run_ms);
+    std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(when_ms(rng)));
+    ::kill(pid, SIGKILL);
+    const int code = wait(pid);
+    if (code == -SIGKILL) ++kills;
+    if (code == 0) {  // finished before the kill: start over
+      fs::remove(dir_ / "final.bin");
+      fs::remove_all(dir_ / "checkpoints");
+    }
+    ASSERT_TRUE(code == 0 || code == -SIGKILL) << "child failed with " << code;
+  }
+  EXPECT_GE(kills, 3) << "the run is too short to be killed mid-way";
+  const pid_t last = ::fork();
+  if (last == 0) run_filter_child(fx, dir_);
+  ASSERT_EQ(wait(last), 0);
+  const std::string log = slurp(dir_ / "starts.log");
+  std::printf("NavFilter: uninterrupted %.0f ms, %zu measurements, %d kills; starts (applied "
+              "measurements):\n%s",
+              run_ms, fx.dive.measurements.size(), kills, log.c_str());
+  EXPECT_TRUE(std::regex_search(log, std::regex("start [1-9][0-9]* "))) << log;
+  const std::string got = slurp(dir_ / "final.bin");
+  ASSERT_EQ(got.size(), expected.size());
+  EXPECT_TRUE(std::equal(expected.begin(), expected.end(),
+                         reinterpret_cast<const std::uint8_t*>(got.data())))
+      << "the resumed NavFilter differs from the uninterrupted one";
+  std::unique_ptr<NavFilter> resumed = fx.make();
+  SectionSet set;
+  const Bytes got_bytes(got.begin(), got.end());
+  ASSERT_TRUE(SectionSet::decode(got_bytes, &set).ok());
+  ASSERT_TRUE(restore_nav_filter(set, resumed.get()).ok());
+  EXPECT_EQ(resumed->esdf().num_blocks(), reference->esdf().num_blocks());  // no state lost
+  EXPECT_EQ(resumed->images().size(), fx.dive.image_truth.size());
+  EXPECT_EQ(resumed->links().size(), reference->links().size());
+}
+
+TEST(ResumeSkipper, SkipsThePrefixAppliedIncludingTies) {
+  auto at = [](std::int64_t t) { return Measurement{Depth{MeasurementTime{t, 0, 0, 0}, 1.0}}; };
+  AppliedTracker tracker;
+  for (std::int64_t t : {10, 20, 20}) tracker.applied(at(t));
+  EXPECT_EQ(tracker.point().validity_us, 20);
+  EXPECT_EQ(tracker.point().applied_at_validity, 2u);
+  EXPECT_EQ(tracker.point().applied, 3u);
+  ResumeSkipper skipper(tracker.point());
+  std::vector<bool> skipped;
+  for (std::int64_t t : {5, 10, 20, 20, 20, 15, 30}) skipped.push_back(skipper.skip(at(t)));
+  EXPECT_EQ(skipped, (std::vector<bool>{true, true, true, true, false, true, false}));
+  EXPECT_EQ(skipper.skipped(), 5u);
+  SectionWriter w;
+  ASSERT_TRUE(add_resume_section(tracker.point(), &w).ok());
+  const Bytes bytes = w.finish();
+  SectionSet set;
+  ASSERT_TRUE(SectionSet::decode(bytes, &set).ok());
+  ResumePoint p;
+  ASSERT_TRUE(restore_resume_point(set, &p).ok());
+  EXPECT_EQ(p.validity_us, 20);
+  EXPECT_EQ(p.applied_at_validity, 2u);
 }
 
 TEST(CheckpointWorker, OffersAreWrittenSupersededAndFlushedOnStop) {

@@ -1,6 +1,7 @@
 // NavFilter checkpoints (filter/nav_filter_checkpoint.h) on the synthetic dive of
 // support/synthetic_dive.h: a filter restored from a checkpoint taken anywhere in the dive
-// (before initialisation, between images, with a pending image) and fed the remaining
+// (before initialisation, between images with the recovery's warm start behind the filter,
+// with a pending image) and fed the remaining
 // measurements ends bit-identical to the uninterrupted filter, link history and trajectory
 // included; every 11th truncation of the NAVF section is refused, a flipped byte (every 17th) is refused or
 // decodes to exactly those bytes, and a refused restore leaves the filter untouched.
@@ -60,6 +61,7 @@ TEST(NavFilterCheckpoint, ResumedFilterEndsBitIdentical) {
   // Cut points: before initialisation, just after, right after an image (pending), mid-dive,
   // near the end.
   std::vector<std::size_t> cuts = {0, 1, 5, ms.size() / 2, ms.size() - 3};
+  for (std::size_t k = 1; k < 8; ++k) cuts.push_back(k * ms.size() / 8 + 3);  // between images
   for (std::size_t i = 10; i < ms.size(); ++i) {
     if (std::holds_alternative<ImageEvent>(ms[i]) && i > ms.size() / 3) {
       cuts.push_back(i + 1);

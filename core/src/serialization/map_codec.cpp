@@ -339,10 +339,23 @@ Status restore_recovery(const SectionSet& sections, int num_blocks, StateRecover
   if (dim != static_cast<std::uint32_t>(d)) {
     return r.error("block_dim " + std::to_string(dim) + ", the recovery has " + std::to_string(d));
   }
-  Eigen::MatrixXd X;
-  if (Status s = r.matrix(&X, Eigen::Index{num_blocks} * d, d + 1, false, "warm start"); !s.ok()) {
-    return s;
+  // The warm start may lag the filter (NavFilter extends it once per image), never lead it.
+  const std::size_t at = r.offset();
+  std::uint32_t rows = 0, cols = 0;
+  if (Status s = r.u32(&rows, "warm start rows"); !s.ok()) return s;
+  if (Status s = r.u32(&cols, "warm start columns"); !s.ok()) return s;
+  if (cols != static_cast<std::uint32_t>(d + 1) || rows % static_cast<std::uint32_t>(d) != 0 ||
+      rows > static_cast<std::uint64_t>(num_blocks) * static_cast<std::uint64_t>(d)) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "RCVY section: warm start is " + std::to_string(rows) + "x" +
+                             std::to_string(cols) + ", expected at most " +
+                             std::to_string(num_blocks) + " blocks of " + std::to_string(d) +
+                             " rows x " + std::to_string(d + 1) + " at offset " +
+                             std::to_string(at));
   }
+  if (Status s = r.check_count(std::uint64_t{rows} * cols, 8, "warm start"); !s.ok()) return s;
+  Eigen::MatrixXd X(rows, cols);
+  if (Status s = r.values(&X, "warm start"); !s.ok()) return s;
   if (Status s = r.expect_end(); !s.ok()) return s;
   if (X.rows() == 0) {  // an uninitialised filter: a recovery that has not started either
     *recovery = StateRecovery(d, recovery->options());

@@ -69,8 +69,9 @@ Status restore_map(const SectionSet& sections, std::optional<Esdf>* filter,
 
 /// Adds the "RCVY" section (the warm start of `recovery`).
 Status add_recovery_section(const StateRecovery& recovery, SectionWriter* writer);
-/// Sets recovery's warm start from the "RCVY" section; it must have `num_blocks` blocks of the
-/// recovery's block_dim. On error `recovery` is unchanged.
+/// Sets recovery's warm start from the "RCVY" section; it may have at most `num_blocks` blocks
+/// of the recovery's block_dim (it may lag the filter, never lead it). On error `recovery` is
+/// unchanged.
 Status restore_recovery(const SectionSet& sections, int num_blocks, StateRecovery* recovery);
 
 }  // namespace nav::core
