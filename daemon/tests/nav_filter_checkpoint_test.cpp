@@ -7,6 +7,7 @@
 // decodes to exactly those bytes, and a refused restore leaves the filter untouched.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <memory>
 #include <vector>
 
@@ -14,6 +15,8 @@
 #include "nav/daemon/config.h"
 #include "nav/daemon/filter/nav_filter.h"
 #include "nav/daemon/filter/nav_filter_checkpoint.h"
+#include "nav/daemon/filter/nav_filter_checkpointer.h"
+#include "nav/daemon/resume_point.h"
 #include "support/synthetic_dive.h"
 
 namespace nav::daemon {
@@ -132,6 +135,62 @@ TEST(NavFilterCheckpoint, CorruptNavfIsRefusedAndTheFilterUntouched) {
   EXPECT_NE(s.message().find("CRC-32 mismatch in section NAVF"), std::string::npos)
       << s.message();
   EXPECT_EQ(encode(*target), untouched);
+}
+
+TEST(NavFilterCheckpointer, StopResumeAndSkipEndBitIdentical) {
+  const Fixture fx(60.0);
+  const auto& ms = fx.dive.measurements;
+  auto reference = fx.make();
+  for (const Measurement& m : ms) ASSERT_TRUE(reference->process(m).ok());
+  ASSERT_TRUE(reference->finish().ok());
+
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("nav_filter_checkpointer_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  CheckpointConfig config;
+  config.path = dir.string();
+  config.period_s = 1e-3;
+  config.keep = 2;
+  {  // First run: stopped (SIGTERM) half-way, shutdown checkpoint written.
+    auto f = fx.make();
+    NavFilterCheckpointer checkpointer(config);
+    for (std::size_t i = 0; i < ms.size() / 2; ++i) {
+      ASSERT_TRUE(f->process(ms[i]).ok());
+      checkpointer.after_measurement(*f, ms[i]);
+    }
+    checkpointer.shutdown(*f);
+    const CheckpointWorkerStats s = checkpointer.stats();
+    EXPECT_GE(s.written, 1u);
+    EXPECT_EQ(s.failed, 0u);
+    EXPECT_EQ(checkpointer.point().applied, ms.size() / 2);
+  }
+  ResumedNavFilter resumed = resume_nav_filter(dir, [&fx] { return fx.make(); });
+  ASSERT_NE(resumed.filter, nullptr);
+  EXPECT_TRUE(resumed.skipped.empty());
+  EXPECT_EQ(resumed.point.applied, ms.size() / 2);
+  {  // Second run: the whole input again, what the checkpoint holds skipped.
+    NavFilterCheckpointer checkpointer(config, resumed.point);
+    ResumeSkipper skipper(resumed.point);
+    for (const Measurement& m : ms) {
+      if (skipper.skip(m)) continue;
+      ASSERT_TRUE(resumed.filter->process(m).ok());
+      checkpointer.after_measurement(*resumed.filter, m);
+    }
+    EXPECT_EQ(skipper.skipped(), ms.size() / 2);
+    checkpointer.shutdown(*resumed.filter);
+    EXPECT_EQ(checkpointer.point().applied, ms.size());
+  }
+  ASSERT_TRUE(resumed.filter->finish().ok());
+  EXPECT_EQ(encode(*resumed.filter), encode(*reference));
+  // A checkpoint written by another payload version is skipped with the reason.
+  CheckpointWriter writer(dir, 2);
+  ASSERT_TRUE(writer.write(kNavFilterPayloadVersion + 1, Bytes{1, 2, 3}).ok);
+  resumed = resume_nav_filter(dir, [&fx] { return fx.make(); });
+  ASSERT_EQ(resumed.skipped.size(), 1u);
+  EXPECT_NE(resumed.skipped[0].reason.find("payload version 2, this navd reads 1"),
+            std::string::npos);
+  EXPECT_EQ(resumed.point.applied, ms.size());
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
