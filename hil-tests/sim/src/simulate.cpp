@@ -158,7 +158,8 @@ SimSummary simulate_dive(const SimOptions& o, const daemon::NavdConfig& config,
 
     const Guidance::Command cmd = guidance.update(x[0], x[1]);
     if (cmd.camera_on) imaging_track.push_back({x[0], x[1]});
-    const bool image_due = cmd.camera_on && end_us < 0 &&
+    // The first image 1 s into the dive, once every sensor has reported (navd initialises).
+    const bool image_due = cmd.camera_on && end_us < 0 && t_us >= kDiveStartMonotonicUs + 1000000 &&
                            (last_image_us < 0 || t_us - last_image_us >= image_period_us);
     if (image_due) {
       const std::int64_t frame = sum.images++;

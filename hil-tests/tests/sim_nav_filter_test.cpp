@@ -1,0 +1,101 @@
+// A simulated dive through navd's whole measurement path (dive-log source, sensor decoders,
+// time-of-validity order, NavFilter with the oracle's registrations): dead reckoning drifts,
+// camera links (loop closures included) pull the estimate back to the truth, and the gate
+// rejects the injected outliers. This checks that the simulated data is consistent with the
+// filter's models (mounts, frames, signs, clocks), not the filter itself.
+//
+// Known filter limit (not the data's): NavFilter diverges after a prediction of a few tens of
+// µs (two sensors' times of validity 53 µs apart with this seed: heading at +69 µs, altimeter
+// at +122 µs; the constant-velocity Q ~ dt^3 makes Q^-1 huge in the information form). Until
+// it merges or skips such steps, this test moves a measurement less than kMergeUs after the
+// previous one onto the previous one's time.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+
+#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/sources/dive_log_source.h"
+#include "support/sim_dive.h"
+
+namespace nav::sim::test {
+namespace {
+
+const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
+
+struct FilterRun {
+  double final_xy_error_m = 0.0, max_xy_error_m = 0.0;
+  daemon::NavFilterCounters counters;
+};
+
+FilterRun run_filter(const std::filesystem::path& dir, bool links) {
+  const daemon::NavdConfig cfg = daemon::load_config_file((dir / "config.yaml").string());
+  const std::string log = (dir / "dive.lcmlog").string();
+  const daemon::RegistrationTable table = daemon::load_registrations(log);
+  daemon::MeasurementQueue queue(1 << 17);
+  std::atomic<bool> stop{false}, done{false};
+  daemon::DiveLogSourceOptions so;
+  so.as_fast_as_possible = true;
+  daemon::run_dive_log_source(log, cfg, so, queue, stop, done);
+  std::vector<daemon::Measurement> all;
+  queue.pop_bulk(all, 1 << 17);
+  std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) {
+    return daemon::validity_us(a) < daemon::validity_us(b);
+  });
+  daemon::NavFilterOptions fo = daemon::NavFilterOptions::from_config(cfg);
+  fo.propose_links = links;
+  daemon::NavFilter filter(cfg, &table, fo);
+  constexpr std::int64_t kMergeUs = 1000;
+  std::int64_t last_us = 0;
+  for (daemon::Measurement m : all) {
+    const std::int64_t t_us = daemon::validity_us(m);
+    if (t_us > last_us && t_us - last_us < kMergeUs)
+      std::visit([&](auto& x) { x.time.validity_us = last_us; }, m);
+    last_us = daemon::validity_us(m);
+    const core::Status s = filter.process(m);
+    EXPECT_TRUE(s.ok()) << s.to_string();
+    if (!s.ok()) break;
+  }
+  EXPECT_TRUE(filter.finish().ok());
+  const auto images = read_csv(dir / "images.csv");
+  FilterRun r;
+  r.counters = filter.counters();
+  for (const daemon::ImageRecord& im : filter.images()) {
+    const auto& truth = images.at(im.frame_id);
+    const double e = std::hypot(im.robot_mean[0] - truth[2], im.robot_mean[1] - truth[3]);
+    r.max_xy_error_m = std::max(r.max_xy_error_m, e);
+    r.final_xy_error_m = e;
+  }
+  return r;
+}
+
+TEST(SimNavFilter, LinksBoundTheDriftOfDeadReckoning) {
+  const auto dir = scratch_dir("filter");
+  SimOptions o;
+  o.out_dir = dir.string();
+  o.seed = 4;
+  o.mission.images = 150;
+  simulate_dive(o, sim_config_path().string());
+  const FilterRun dr = run_filter(dir, false);
+  const FilterRun slam = run_filter(dir, true);
+  std::printf(
+      "dead reckoning: final %.3f m, max %.3f m; SLAM: final %.3f m, max %.3f m; "
+      "links proposed %llu accepted %llu gated %llu, outliers rejected %llu accepted %llu\n",
+      dr.final_xy_error_m, dr.max_xy_error_m, slam.final_xy_error_m, slam.max_xy_error_m,
+      static_cast<unsigned long long>(slam.counters.links_proposed),
+      static_cast<unsigned long long>(slam.counters.links_accepted),
+      static_cast<unsigned long long>(slam.counters.links_gated),
+      static_cast<unsigned long long>(slam.counters.outliers_rejected),
+      static_cast<unsigned long long>(slam.counters.outliers_accepted));
+  EXPECT_EQ(slam.counters.images, 150u);
+  EXPECT_GT(slam.counters.links_accepted, 150u);
+  EXPECT_LT(slam.max_xy_error_m, 1.0);
+  EXPECT_LT(slam.max_xy_error_m, dr.max_xy_error_m);
+  EXPECT_EQ(slam.counters.outliers_accepted, 0u);
+}
+
+}  // namespace
+}  // namespace nav::sim::test
