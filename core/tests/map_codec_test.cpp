@@ -349,8 +349,7 @@ TEST(MapCodec, ErrorsSayWhatAndWhere) {
   Status s = decode_esdf(bad, 1000, &f);
   EXPECT_NE(s.message().find("ESDF section: neighbour count 238 cannot fit"), std::string::npos)
       << s.message();
-  EXPECT_NE(s.message().find("at offset " + std::to_string(1000 + count_at + 4)),
-            std::string::npos)
+  EXPECT_NE(s.message().find("at offset " + std::to_string(1000 + count_at + 4)), std::string::npos)
       << s.message();
   // Break the transpose of the first off-diagonal block of row 0.
   bad = esdf;

@@ -129,7 +129,8 @@ struct Dive {
     if (Status s = SectionSet::decode(payload, &set); !s.ok()) return s.to_string();
     if (Status s = core::restore_map(set, &f, &b); !s.ok()) return s.to_string();
     core::StateRecovery rec(12, recovery_options());
-    if (Status s = core::restore_recovery(set, f->num_blocks(), &rec); !s.ok()) return s.to_string();
+    if (Status s = core::restore_recovery(set, f->num_blocks(), &rec); !s.ok())
+      return s.to_string();
     const core::SectionView* v = nullptr;
     if (Status s = set.require(kDiveSectionTag, 1, &v); !s.ok()) return s.to_string();
     core::ByteReader r(v->bytes, "SURV section", v->offset);
@@ -374,14 +375,15 @@ Bytes encode_filter(const NavFilter& f, const ResumePoint* point) {
         point = p;
         return "";
       });
-  std::ofstream(dir / "starts.log", std::ios::app)
-      << "start " << point.applied << " skipped " << loaded.skipped.size() << [&] {
-           std::string reasons;
-           for (const SkippedCheckpoint& k : loaded.skipped) {
-             reasons += " [" + k.path.filename().string() + ": " + k.reason + "]";
-           }
-           return reasons;
-         }() << "\n";
+  std::ofstream(dir / "starts.log", std::ios::app) << "start " << point.applied << " skipped "
+                                                   << loaded.skipped.size() <<
+      [&] {
+        std::string reasons;
+        for (const SkippedCheckpoint& k : loaded.skipped) {
+          reasons += " [" + k.path.filename().string() + ": " + k.reason + "]";
+        }
+        return reasons;
+      }() << "\n";
   CheckpointWorker worker(dir / "checkpoints", 3);
   AppliedTracker tracker(point);
   ResumeSkipper skipper(point);
@@ -435,9 +437,10 @@ TEST_F(CheckpointResume, NavFilterKilledAtRandomPointsResumesToTheSameMap) {
   if (last == 0) run_filter_child(fx, dir_);
   ASSERT_EQ(wait(last), 0);
   const std::string log = slurp(dir_ / "starts.log");
-  std::printf("NavFilter: uninterrupted %.0f ms, %zu measurements, %d kills; starts (applied "
-              "measurements):\n%s",
-              run_ms, fx.dive.measurements.size(), kills, log.c_str());
+  std::printf(
+      "NavFilter: uninterrupted %.0f ms, %zu measurements, %d kills; starts (applied "
+      "measurements):\n%s",
+      run_ms, fx.dive.measurements.size(), kills, log.c_str());
   EXPECT_TRUE(std::regex_search(log, std::regex("start [1-9][0-9]* "))) << log;
   const std::string got = slurp(dir_ / "final.bin");
   ASSERT_EQ(got.size(), expected.size());

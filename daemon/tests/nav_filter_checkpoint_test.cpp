@@ -3,8 +3,10 @@
 // (before initialisation, between images with the recovery's warm start behind the filter,
 // with a pending image) and fed the remaining
 // measurements ends bit-identical to the uninterrupted filter, link history and trajectory
-// included; every 11th truncation of the NAVF section is refused, a flipped byte (every 17th) is refused or
-// decodes to exactly those bytes, and a refused restore leaves the filter untouched.
+// included; every 11th truncation of the NAVF section is refused, a flipped byte (every 17th) is
+// refused or decodes to exactly those bytes, and a refused restore leaves the filter untouched.
+#include "nav/daemon/filter/nav_filter_checkpoint.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -14,7 +16,6 @@
 #include "nav/core/serialization/sections.h"
 #include "nav/daemon/config.h"
 #include "nav/daemon/filter/nav_filter.h"
-#include "nav/daemon/filter/nav_filter_checkpoint.h"
 #include "nav/daemon/filter/nav_filter_checkpointer.h"
 #include "nav/daemon/resume_point.h"
 #include "support/synthetic_dive.h"
@@ -102,7 +103,10 @@ TEST(NavFilterCheckpoint, CorruptNavfIsRefusedAndTheFilterUntouched) {
   auto with_navf = [&](const Bytes& bytes) {
     core::SectionWriter w;
     for (const core::SectionView& v : set.sections()) {
-      EXPECT_TRUE(w.add(v.tag, v.version, v.tag == kNavFilterSectionTag ? bytes : Bytes(v.bytes.begin(), v.bytes.end())).ok());
+      EXPECT_TRUE(
+          w.add(v.tag, v.version,
+                v.tag == kNavFilterSectionTag ? bytes : Bytes(v.bytes.begin(), v.bytes.end()))
+              .ok());
     }
     return w.finish();
   };
@@ -132,8 +136,7 @@ TEST(NavFilterCheckpoint, CorruptNavfIsRefusedAndTheFilterUntouched) {
   Bytes flipped = payload;
   flipped[static_cast<std::size_t>(navf->offset) + 10] ^= 0x01;
   const core::Status s = restore(flipped, target.get());
-  EXPECT_NE(s.message().find("CRC-32 mismatch in section NAVF"), std::string::npos)
-      << s.message();
+  EXPECT_NE(s.message().find("CRC-32 mismatch in section NAVF"), std::string::npos) << s.message();
   EXPECT_EQ(encode(*target), untouched);
 }
 

@@ -114,8 +114,7 @@ TEST_F(NavdConfigErrors, OutOfRange) {
 
 TEST_F(NavdConfigErrors, MissingFileAndSyntaxError) {
   expect_config_error(dir_ / "does_not_exist.yaml", "<root>", "cannot open file");
-  expect_config_error(write("syntax.yaml", "filter: [\n"), "<root>",
-                      "YAML syntax error at line 2");
+  expect_config_error(write("syntax.yaml", "filter: [\n"), "<root>", "YAML syntax error at line 2");
 }
 
 TEST_F(NavdConfigErrors, BadCanSignalsFile) {

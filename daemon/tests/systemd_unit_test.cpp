@@ -68,8 +68,8 @@ struct ShellRun {
 
 ShellRun run_shell(const std::string& command, const fs::path& dir) {
   const fs::path out = dir / "output.txt";
-  const std::string line = "cd '" + dir.string() + "' && " + command + " >'" + out.string() +
-                           "' 2>&1";
+  const std::string line =
+      "cd '" + dir.string() + "' && " + command + " >'" + out.string() + "' 2>&1";
   const int status = std::system(line.c_str());
   return ShellRun{WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out)};
 }

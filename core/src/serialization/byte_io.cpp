@@ -57,7 +57,8 @@ Status ByteReader::check_count(std::uint64_t count, std::size_t min_item_bytes,
 
 std::uint64_t ByteReader::get(int n) {
   std::uint64_t v = 0;
-  for (int i = 0; i < n; ++i) v |= std::uint64_t{bytes_[pos_ + static_cast<std::size_t>(i)]} << (8 * i);
+  for (int i = 0; i < n; ++i)
+    v |= std::uint64_t{bytes_[pos_ + static_cast<std::size_t>(i)]} << (8 * i);
   pos_ += static_cast<std::size_t>(n);
   return v;
 }
@@ -116,8 +117,8 @@ Status ByteReader::matrix(Eigen::MatrixXd* m, Eigen::Index rows, Eigen::Index co
     return Status::Error(StatusCode::kInvalidArgument,
                          what_ + ": " + field + " is " + std::to_string(r) + "x" +
                              std::to_string(c) + ", expected " + std::to_string(rows) + "x" +
-                             std::to_string(cols) + (allow_empty ? " or 0x0" : "") +
-                             " at offset " + std::to_string(at));
+                             std::to_string(cols) + (allow_empty ? " or 0x0" : "") + " at offset " +
+                             std::to_string(at));
   }
   if (Status s = need(8 * static_cast<std::size_t>(r) * c, field); !s.ok()) return s;
   Eigen::MatrixXd out(r, c);

@@ -1,10 +1,10 @@
 // Map (ESDF + Algorithm 1 bounds) to/from checkpoint sections (see serialization/map_codec.h).
 #include "nav/core/serialization/map_codec.h"
 
-#include "nav/core/serialization/byte_io.h"
-
 #include <string>
 #include <utility>
+
+#include "nav/core/serialization/byte_io.h"
 
 namespace nav::core {
 
@@ -21,8 +21,7 @@ struct MapCodecAccess {
   static std::vector<std::uint8_t> encode(const Esdf& filter);
   static Status decode(ByteReader& r, std::optional<Esdf>* out);
   static std::vector<std::uint8_t> encode(const CovarianceBounds& bounds);
-  static Status decode(ByteReader& r, int num_filter_blocks,
-                       std::optional<CovarianceBounds>* out);
+  static Status decode(ByteReader& r, int num_filter_blocks, std::optional<CovarianceBounds>* out);
   static Status read_bound_entry(ByteReader& r, const CovarianceBounds& b, int previous_state,
                                  int num_filter_blocks, int* state, CovarianceBounds::Entry* e);
 };
@@ -106,9 +105,9 @@ void MapCodecAccess::write_vector(const BlockVector& v, ByteWriter& w) {
 
 Status MapCodecAccess::read_vector(ByteReader& r, int num_blocks, BlockVector* v,
                                    const char* field) {
-  if (Status s = r.check_count(static_cast<std::uint64_t>(num_blocks) *
-                                   static_cast<std::uint64_t>(v->block_dim_),
-                               8, field);
+  if (Status s = r.check_count(
+          static_cast<std::uint64_t>(num_blocks) * static_cast<std::uint64_t>(v->block_dim_), 8,
+          field);
       !s.ok()) {
     return s;
   }
@@ -210,8 +209,8 @@ Status MapCodecAccess::read_bound_entry(ByteReader& r, const CovarianceBounds& b
   std::int64_t epoch = 0;
   if (Status s = r.i64(&epoch, "snapshot epoch"); !s.ok()) return s;
   if (epoch < -1 || epoch > b.epoch_ || (epoch == -1) != (e->snapshot_bound.size() == 0)) {
-    return r.error("snapshot epoch " + std::to_string(epoch) + " of state " +
-                   std::to_string(s32) + " does not match its snapshot bound (" +
+    return r.error("snapshot epoch " + std::to_string(epoch) + " of state " + std::to_string(s32) +
+                   " does not match its snapshot bound (" +
                    std::to_string(e->snapshot_bound.rows()) + " rows) and the epoch " +
                    std::to_string(b.epoch_));
   }
@@ -228,7 +227,8 @@ Status MapCodecAccess::decode(ByteReader& r, int num_filter_blocks,
     return r.error("bounds block_dim " + std::to_string(d) + " outside [1, 12]");
   }
   if (Status s = r.u8(&certify, "certify_truncation"); !s.ok()) return s;
-  if (certify > 1) return r.error("certify_truncation byte " + std::to_string(certify) + " not 0/1");
+  if (certify > 1)
+    return r.error("certify_truncation byte " + std::to_string(certify) + " not 0/1");
   CovarianceBounds b(static_cast<int>(d), BoundsOptions{certify == 1});
   const auto di = static_cast<Eigen::Index>(d);
   if (Status s = r.matrix(&b.robot_bound_, di, di, true, "robot bound"); !s.ok()) return s;
@@ -309,10 +309,10 @@ Status restore_map(const SectionSet& sections, std::optional<Esdf>* filter,
     }
     if (Status s = decode_bounds(v->bytes, v->offset, f->num_blocks(), &b); !s.ok()) return s;
     if (b->block_dim() != f->block_dim()) {
-      return Status::Error(StatusCode::kInvalidArgument,
-                           "map checkpoint: bounds have block_dim " +
-                               std::to_string(b->block_dim()) + ", the filter " +
-                               std::to_string(f->block_dim()));
+      return Status::Error(StatusCode::kInvalidArgument, "map checkpoint: bounds have block_dim " +
+                                                             std::to_string(b->block_dim()) +
+                                                             ", the filter " +
+                                                             std::to_string(f->block_dim()));
     }
   }
   filter->emplace(std::move(*f));
@@ -346,12 +346,11 @@ Status restore_recovery(const SectionSet& sections, int num_blocks, StateRecover
   if (Status s = r.u32(&cols, "warm start columns"); !s.ok()) return s;
   if (cols != static_cast<std::uint32_t>(d + 1) || rows % static_cast<std::uint32_t>(d) != 0 ||
       rows > static_cast<std::uint64_t>(num_blocks) * static_cast<std::uint64_t>(d)) {
-    return Status::Error(StatusCode::kInvalidArgument,
-                         "RCVY section: warm start is " + std::to_string(rows) + "x" +
-                             std::to_string(cols) + ", expected at most " +
-                             std::to_string(num_blocks) + " blocks of " + std::to_string(d) +
-                             " rows x " + std::to_string(d + 1) + " at offset " +
-                             std::to_string(at));
+    return Status::Error(
+        StatusCode::kInvalidArgument,
+        "RCVY section: warm start is " + std::to_string(rows) + "x" + std::to_string(cols) +
+            ", expected at most " + std::to_string(num_blocks) + " blocks of " + std::to_string(d) +
+            " rows x " + std::to_string(d + 1) + " at offset " + std::to_string(at));
   }
   if (Status s = r.check_count(std::uint64_t{rows} * cols, 8, "warm start"); !s.ok()) return s;
   Eigen::MatrixXd X(rows, cols);

@@ -1,12 +1,12 @@
 // Section container for map checkpoints (see nav/core/serialization/sections.h).
 #include "nav/core/serialization/sections.h"
 
-#include "nav/core/serialization/byte_io.h"
-#include "nav/core/serialization/crc32.h"
-
 #include <cstdio>
 #include <cstring>
 #include <utility>
+
+#include "nav/core/serialization/byte_io.h"
+#include "nav/core/serialization/crc32.h"
 
 namespace nav::core {
 namespace {
@@ -14,9 +14,8 @@ namespace {
 constexpr char kMagic[8] = {'N', 'A', 'V', 'S', 'E', 'C', 'T', 'S'};
 
 Status bad(const std::string& message, std::size_t offset) {
-  return Status::Error(StatusCode::kInvalidArgument,
-                       "map section container: " + message + " at offset " +
-                           std::to_string(offset));
+  return Status::Error(StatusCode::kInvalidArgument, "map section container: " + message +
+                                                         " at offset " + std::to_string(offset));
 }
 
 }  // namespace
@@ -40,8 +39,7 @@ Status SectionWriter::add(std::uint32_t tag, std::uint32_t version,
   for (const Entry& e : sections_) {
     if (e.tag == tag) {
       return Status::Error(StatusCode::kInvalidArgument,
-                           "SectionWriter::add: section " + section_tag_name(tag) +
-                               " added twice");
+                           "SectionWriter::add: section " + section_tag_name(tag) + " added twice");
     }
   }
   sections_.push_back(Entry{tag, version, std::vector<std::uint8_t>(bytes.begin(), bytes.end())});
@@ -105,8 +103,7 @@ Status SectionSet::decode(std::span<const std::uint8_t> bytes, SectionSet* out,
     if (Status s = r.raw(&v.bytes, static_cast<std::size_t>(length), "section bytes"); !s.ok()) {
       return s;
     }
-    if (options.verify_crc &&
-        crc32_update(crc32(bytes.subspan(header_at, 16)), v.bytes) != crc) {
+    if (options.verify_crc && crc32_update(crc32(bytes.subspan(header_at, 16)), v.bytes) != crc) {
       return bad("CRC-32 mismatch in section " + section_tag_name(v.tag), header_at);
     }
     set.sections_.push_back(v);
@@ -134,8 +131,8 @@ Status SectionSet::require(std::uint32_t tag, std::uint32_t version,
     return Status::Error(StatusCode::kInvalidArgument,
                          "map section container: section " + section_tag_name(tag) +
                              " has version " + std::to_string(v->version) + ", this build reads " +
-                             std::to_string(version) + " (at offset " +
-                             std::to_string(v->offset) + ")");
+                             std::to_string(version) + " (at offset " + std::to_string(v->offset) +
+                             ")");
   }
   *out = v;
   return Status::Ok();

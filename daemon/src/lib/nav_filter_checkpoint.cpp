@@ -60,10 +60,9 @@ Status get_small_int(ByteReader& r, Int* v, const char* field) {
   return Status::Ok();
 }
 
-#define NAV_TRY(expr)                 \
-  do {                                \
-    if (Status s_ = (expr); !s_.ok()) \
-      return s_;                      \
+#define NAV_TRY(expr)                            \
+  do {                                           \
+    if (Status s_ = (expr); !s_.ok()) return s_; \
   } while (false)
 
 }  // namespace
@@ -162,23 +161,32 @@ Status NavFilterCheckpointAccess::get_link(ByteReader& r, LinkRecord* l) {
 }
 
 void NavFilterCheckpointAccess::put_counters(ByteWriter& w, const NavFilterCounters& c) {
-  for (std::uint64_t v :
-       {c.measurements, c.before_initialisation, c.out_of_order, c.updates, c.update_failures,
-        c.unused, c.predictions, c.images, c.duplicate_images, c.recoveries, c.recovery_failures,
-        c.candidates, c.links_proposed, c.links_accepted, c.links_gated, c.registration_failed,
-        c.not_registered, c.outliers_rejected, c.outliers_accepted, c.bound_update_failures}) {
+  for (std::uint64_t v : {c.measurements,      c.before_initialisation,
+                          c.out_of_order,      c.updates,
+                          c.update_failures,   c.unused,
+                          c.predictions,       c.images,
+                          c.duplicate_images,  c.recoveries,
+                          c.recovery_failures, c.candidates,
+                          c.links_proposed,    c.links_accepted,
+                          c.links_gated,       c.registration_failed,
+                          c.not_registered,    c.outliers_rejected,
+                          c.outliers_accepted, c.bound_update_failures}) {
     w.u64(v);
   }
   w.f64(c.max_cg_relative_residual);
 }
 
 Status NavFilterCheckpointAccess::get_counters(ByteReader& r, NavFilterCounters* c) {
-  for (std::uint64_t* v :
-       {&c->measurements, &c->before_initialisation, &c->out_of_order, &c->updates,
-        &c->update_failures, &c->unused, &c->predictions, &c->images, &c->duplicate_images,
-        &c->recoveries, &c->recovery_failures, &c->candidates, &c->links_proposed,
-        &c->links_accepted, &c->links_gated, &c->registration_failed, &c->not_registered,
-        &c->outliers_rejected, &c->outliers_accepted, &c->bound_update_failures}) {
+  for (std::uint64_t* v : {&c->measurements,      &c->before_initialisation,
+                           &c->out_of_order,      &c->updates,
+                           &c->update_failures,   &c->unused,
+                           &c->predictions,       &c->images,
+                           &c->duplicate_images,  &c->recoveries,
+                           &c->recovery_failures, &c->candidates,
+                           &c->links_proposed,    &c->links_accepted,
+                           &c->links_gated,       &c->registration_failed,
+                           &c->not_registered,    &c->outliers_rejected,
+                           &c->outliers_accepted, &c->bound_update_failures}) {
     NAV_TRY(r.u64(v, "counter"));
   }
   return r.f64(&c->max_cg_relative_residual, "max_cg_relative_residual");
@@ -301,7 +309,8 @@ Status NavFilterCheckpointAccess::check_indices(const ByteReader& r, const NavFi
                    " entries for " + std::to_string(blocks) + " blocks");
   }
   for (long i : f.image_of_block_) {
-    if (i < -1 || i >= images) return r.error("block -> image map names image " + std::to_string(i));
+    if (i < -1 || i >= images)
+      return r.error("block -> image map names image " + std::to_string(i));
   }
   if (f.pending_image_ >= images) {
     return r.error("pending image " + std::to_string(f.pending_image_) + " of " +

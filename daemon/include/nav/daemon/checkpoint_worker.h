@@ -31,7 +31,7 @@ struct CheckpointWorkerStats {
   std::uint64_t superseded = 0;  ///< replaced by a newer offer before being written
   std::uint64_t last_sequence = 0;
   std::uint64_t last_bytes = 0;
-  double last_write_ms = 0.0;    ///< wall time of the last write (incl. fsyncs)
+  double last_write_ms = 0.0;  ///< wall time of the last write (incl. fsyncs)
   std::string last_error;
 };
 

@@ -8,15 +8,14 @@
 // bounds. Offsets are reported relative to `base_offset`, the reader's position in the payload
 // it was cut from (a section's start in the container), so errors point into the file.
 
-#include "nav/core/status.h"
-
 #include <Eigen/Core>
-
 #include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
+
+#include "nav/core/status.h"
 
 namespace nav::core {
 

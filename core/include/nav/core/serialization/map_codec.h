@@ -26,16 +26,16 @@
 // errors name the field and its offset. On error the outputs are untouched: never a half-built
 // filter.
 
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
 #include "nav/core/filter/esdf.h"
 #include "nav/core/recovery/bounds.h"
 #include "nav/core/recovery/state_recovery.h"
 #include "nav/core/serialization/sections.h"
 #include "nav/core/status.h"
-
-#include <cstdint>
-#include <optional>
-#include <span>
-#include <vector>
 
 namespace nav::core {
 

@@ -18,13 +18,13 @@
 // duplicate tags, trailing bytes and, unless switched off, every section's CRC; each error says
 // what and at which offset. No file I/O here (the daemon's checkpoint store writes the bytes).
 
-#include "nav/core/status.h"
-
 #include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
+
+#include "nav/core/status.h"
 
 namespace nav::core {
 

@@ -27,9 +27,9 @@ namespace nav::daemon {
 inline constexpr std::uint32_t kNavFilterPayloadVersion = 1;
 
 struct ResumedNavFilter {
-  std::unique_ptr<NavFilter> filter;  ///< null when no checkpoint could be resumed
-  ResumePoint point;                  ///< what the input must skip (ResumeSkipper)
-  std::filesystem::path path;         ///< the checkpoint resumed
+  std::unique_ptr<NavFilter> filter;       ///< null when no checkpoint could be resumed
+  ResumePoint point;                       ///< what the input must skip (ResumeSkipper)
+  std::filesystem::path path;              ///< the checkpoint resumed
   std::vector<SkippedCheckpoint> skipped;  ///< newer ones refused, with the reason
 };
 
