@@ -137,7 +137,7 @@ DenseRun run_dense(int budget, bool certify, bool direct, unsigned seed) {
     const CsrMatrix csr = lambda.sparseView();
     const RecoveryResult r = recovery.solve(csr, lambda * mu);
     EXPECT_TRUE(r.status.ok()) << r.status.to_string();
-    EXPECT_TRUE(bounds.set_recovery(recovery.robot_covariance(), r.column_residual_frobenius,
+    EXPECT_TRUE(bounds.set_recovery(recovery.robot_covariance(), r.column_residual_spectral,
                                     recovery.num_blocks())
                     .ok());
     // Links from the robot to up to two random older states (one of them possibly twice).

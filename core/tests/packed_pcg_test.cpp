@@ -220,6 +220,13 @@ TEST(StateRecoveryKernels, PackedAndGenericAgreeOverSteps) {
     EXPECT_NEAR(a.mean_relative_residual, b.mean_relative_residual,
                 1e-6 * b.mean_relative_residual);
     EXPECT_EQ(b.refactored_blocks, 40);
+    // ‖E_r - Λ Σ̂_{*r}‖₂ against a dense SVD of the residual (before Λ changes below).
+    const Eigen::MatrixXd E = Eigen::MatrixXd::Identity(lambda.dim(), d);
+    const Eigen::MatrixXd residual = E - lambda.to_dense() * packed.robot_column();
+    const double spectral = Eigen::JacobiSVD<Eigen::MatrixXd>(residual).singularValues()[0];
+    EXPECT_NEAR(a.column_residual_spectral, spectral, 1e-6 * spectral);
+    EXPECT_NEAR(b.column_residual_spectral, spectral, 1e-6 * spectral);
+    EXPECT_LE(a.column_residual_spectral, a.column_residual_frobenius);
     EXPECT_EQ(a.refactored_blocks, step == 0 ? 40 : 1);
     lambda.add_to_block(0, 0, 0.5 * Eigen::MatrixXd::Identity(d, d));  // changes one block
   }

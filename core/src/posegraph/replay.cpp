@@ -178,7 +178,7 @@ RecoveryResult PoseGraphReplay::recover() {
   }
   if (!result.status.ok()) return result;
   result.status = bounds_.set_recovery(recovery_.robot_covariance(),
-                                       result.column_residual_frobenius, filter_.num_blocks());
+                                       result.column_residual_spectral, filter_.num_blocks());
   return result;
 }
 

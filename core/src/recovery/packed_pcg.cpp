@@ -128,6 +128,20 @@ void column_dots(const double* A, const double* B, std::ptrdiff_t rows, int widt
   }
 }
 
+/// gram (width x width, row-major) = Aᵀ A over the rows of a packed matrix.
+NAV_PACKED_KERNEL
+void gram_kernel(const double* A, std::ptrdiff_t rows, int width, double* gram) {
+  for (int c = 0; c < width; ++c) {
+    for (int ch = 0; ch < width; ch += kLanes) {
+      v8d s{};
+      for (std::ptrdiff_t i = 0; i < rows; ++i) {
+        s += A[i * width + c] * NAV_LOAD(A + i * width + ch);
+      }
+      NAV_STORE(gram + std::ptrdiff_t{c} * width + ch, s);
+    }
+  }
+}
+
 /// R = B - Q.
 NAV_PACKED_KERNEL
 void subtract(const double* B, const double* Q, double* R, std::ptrdiff_t size) {
@@ -194,6 +208,15 @@ void unpack_columns(const std::vector<double>& packed, int width, Eigen::Ref<Eig
     double* out = M.col(c).data();
     for (Eigen::Index i = 0; i < n; ++i) out[i] = in[i * width + c];
   }
+}
+
+Eigen::MatrixXd packed_gram(const double* A, Eigen::Index rows, int width, int first,
+                            int count) {
+  std::vector<double> gram(static_cast<size_t>(width) * static_cast<size_t>(width));
+  gram_kernel(A, rows, width, gram.data());
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>
+      G(gram.data(), width, width);
+  return G.block(first, first, count, count);
 }
 
 void PackedBlockOperator::refresh(const InformationMatrix& lambda) {

@@ -45,6 +45,10 @@ void pack_columns(const Eigen::Ref<const Eigen::MatrixXd>& M, int width,
 /// Inverse of pack_columns for the first M.cols() columns.
 void unpack_columns(const std::vector<double>& packed, int width, Eigen::Ref<Eigen::MatrixXd> M);
 
+/// Gram matrix G = Aᵀ A of the packed columns [first, first + count) of a packed matrix
+/// (rows x width): the input of the spectral norm ‖A‖₂ = sqrt(λmax(G)).
+Eigen::MatrixXd packed_gram(const double* A, Eigen::Index rows, int width, int first, int count);
+
 /// Λ (an InformationMatrix) as a block-sparse operator on packed matrices, read in place.
 class PackedBlockOperator {
  public:

@@ -83,6 +83,9 @@ struct RecoveryResult {
   /// ‖E_r - Λ Σ̂_{*r}‖_F, the true residual of the covariance columns (input of the certified
   /// error bound in bounds.h).
   double column_residual_frobenius = 0.0;
+  /// ‖E_r - Λ Σ̂_{*r}‖₂ (largest singular value; <= the Frobenius norm, up to sqrt(block_dim)
+  /// times smaller), every mode: the tighter input of the same certificate (bounds.h).
+  double column_residual_spectral = 0.0;
   /// Diagonal blocks whose preconditioner inverse was recomputed (all of them except with the
   /// packed kernel, which re-inverts only changed blocks).
   int refactored_blocks = 0;
@@ -143,6 +146,8 @@ class StateRecovery {
   void fill_rhs(const Eigen::VectorXd& eta);
   void finish(RecoveryResult& result, const Eigen::VectorXd& residual_norm,
               const Eigen::VectorXd& rhs_norm) const;
+  /// result.column_residual_spectral from the Gram matrix of the covariance-column residual.
+  static void set_spectral(RecoveryResult& result, const Eigen::MatrixXd& gram);
 
   int block_dim_;
   StateRecoveryOptions options_;
