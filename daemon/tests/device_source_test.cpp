@@ -5,6 +5,7 @@
 // NAV_IMAGE with thumbnail, 16-bit PNG); the health board's snapshot.
 #include "nav/daemon/sources/device_source.h"
 
+#include <arv.h>
 #include <gtest/gtest.h>
 #include <pty.h>
 #include <unistd.h>
@@ -448,6 +449,43 @@ TEST(DeviceSources, OneThreadPerDeviceSensorFromTheConfig) {
   ASSERT_EQ(names.size(), 2u);
   EXPECT_EQ(names[0].name, "heading");
   EXPECT_EQ(names[1].name, "dvl_can");
+}
+
+TEST(DeviceSources, GigeCameraThreadOnAravisInProcessFake) {
+  arv_enable_interface("Fake");
+  const fs::path dir = fs::temp_directory_path() / ("navd_gige_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  NavdConfig config;
+  SensorConfig cam = sensor("camera", SensorType::kCameraGige);
+  cam.transport = GigeTransport{"Fake_1"};
+  cam.camera.fx_px = cam.camera.fy_px = 500.0;
+  cam.camera.pixel_format = PixelFormat::kMono16;  // the stock fake has no Mono12
+  cam.camera.trigger = Trigger::kFreeRun;
+  cam.camera.frame_rate_hz = 20.0;
+  cam.camera.image_dir = dir.string();
+  config.sensors.push_back(cam);
+  SensorHealthBoard board(config);
+  MeasurementQueue queue(256);
+  lcm::LCM lcm("memq://");
+  RawSink sink(lcm);
+  std::atomic<bool> stop{false};
+  DeviceSources sources(config, queue, &lcm, board);
+  ASSERT_EQ(sources.start(stop), 1u);
+  const bool frames = wait_until([&] { return board.at(0).messages.load() >= 3; }, 10s, nullptr);
+  stop.store(true);
+  sources.join();
+  ASSERT_TRUE(frames) << "no frames from the Aravis fake camera";
+  std::vector<Measurement> got;
+  queue.pop_bulk(got, 1000);
+  ASSERT_EQ(got.size(), board.at(0).measurements.load());
+  const auto& e = std::get<ImageEvent>(got.back());
+  EXPECT_TRUE(fs::exists(dir / frame_png_name(e.frame_id))) << e.frame_id;
+  sink.drain();
+  ASSERT_EQ(sink.images.size(), got.size());
+  EXPECT_EQ(sink.images.back().bits_per_pixel, 16);
+  EXPECT_GT(sink.images.back().thumbnail_num_bytes, 0);
+  EXPECT_EQ(sink.images.back().file_path, "images/" + frame_png_name(e.frame_id));
+  fs::remove_all(dir);
 }
 
 TEST(SensorHealthBoard, SnapshotReportsActiveSensorsWithRates) {

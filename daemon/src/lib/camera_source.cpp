@@ -17,12 +17,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr auto kRelaxed = std::memory_order_relaxed;
 
-std::string frame_file_name(std::uint64_t frame_id) {
-  char name[32];
-  std::snprintf(name, sizeof name, "%06llu.png", static_cast<unsigned long long>(frame_id));
-  return name;
-}
-
 /// 16-bit image with 12 significant bits (Mono8 scaled by 16).
 cv::Mat as_16bit(const cv::Mat& image) {
   if (image.depth() == CV_16U) return image;
@@ -69,7 +63,7 @@ class CameraLoop {
     const std::int64_t validity = validity_of(frame, latency_us_);
     std::string file_path;
     if (!image_dir_.empty()) {
-      const std::string name = frame_file_name(frame.frame_id);
+      const std::string name = frame_png_name(frame.frame_id);
       if (write_frame_png(frame, (std::filesystem::path(image_dir_) / name).string())) {
         file_path = "images/" + name;
       } else {
@@ -173,6 +167,12 @@ navlcm::image_metadata_t image_metadata(const drivers::CameraFrame& frame, std::
   m.thumbnail.assign(grey.datastart, grey.dataend);
   m.thumbnail_num_bytes = static_cast<std::int32_t>(m.thumbnail.size());
   return m;
+}
+
+std::string frame_png_name(std::uint64_t frame_id) {
+  char name[32];
+  std::snprintf(name, sizeof name, "%06llu.png", static_cast<unsigned long long>(frame_id));
+  return name;
 }
 
 bool write_frame_png(const drivers::CameraFrame& frame, const std::string& path) {

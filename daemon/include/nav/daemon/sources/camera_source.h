@@ -47,6 +47,9 @@ void run_camera_device(const CameraOpener& open, CameraContext& context);
 navlcm::image_metadata_t image_metadata(const drivers::CameraFrame& frame, std::int64_t validity_us,
                                         const std::string& file_path, int thumbnail_width_px);
 
+/// "<frame_id %06d>.png".
+std::string frame_png_name(std::uint64_t frame_id);
+
 /// Writes `frame` as a 16-bit PNG (see file comment); false with a logged reason on failure.
 bool write_frame_png(const drivers::CameraFrame& frame, const std::string& path);
 
