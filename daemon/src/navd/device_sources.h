@@ -1,0 +1,47 @@
+#pragma once
+// navd's glue for the device threads (nav/daemon/sources/device_sources.h): the per-sensor
+// health board, the LCM instance the raw bytes and NAV_IMAGE go out on, and the DeviceSources,
+// bundled so navd's main wires them with a few lines:
+//
+//   navd::NavdDevices devices(config, queue);         // after the queue, before the threads
+//   devices.attach(publisher);                         // health_t.sensors from the board
+//   if (!replaying) devices.start(stop);               // one thread per non-sim sensor
+//   ... stop.store(true); devices.join();
+//
+// Not in replay: a dive's config names the vehicle's devices, which must not be opened then.
+
+#include <atomic>
+#include <memory>
+
+#include "nav/daemon/config.h"
+#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/sources/device_sources.h"
+#include "nav/daemon/sources/sensor_health.h"
+#include "navd/publisher.h"
+
+namespace lcm {
+class LCM;
+}
+
+namespace nav::navd {
+
+class NavdDevices {
+ public:
+  /// Opens its own LCM at config.lcm.url for RAW_<NAME> / NAV_IMAGE (nothing is published if
+  /// that fails; the threads still decode and push).
+  NavdDevices(const daemon::NavdConfig& config, daemon::MeasurementQueue& queue);
+  ~NavdDevices();
+  /// Publishes the board in the publisher's health_t (call before the publisher runs).
+  void attach(Publisher& publisher) { publisher.set_sensor_health(&health_); }
+  /// Starts the device threads; returns how many (0 when every sensor is `sim`).
+  std::size_t start(const std::atomic<bool>& stop) { return sources_->start(stop); }
+  void join() { sources_->join(); }
+  daemon::SensorHealthBoard& health() { return health_; }
+
+ private:
+  daemon::SensorHealthBoard health_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::unique_ptr<daemon::DeviceSources> sources_;
+};
+
+}  // namespace nav::navd
