@@ -21,6 +21,8 @@ struct NavFilterCheckpointAccess {
 
   static void put_time(ByteWriter& w, const MeasurementTime& t);
   static Status get_time(ByteReader& r, MeasurementTime* t);
+  static void put_measurement(ByteWriter& w, const Measurement& m);
+  static Status get_measurement(ByteReader& r, Measurement* m);
   static void put_attitude(ByteWriter& w, const std::optional<BodyAttitude>& a);
   static Status get_attitude(ByteReader& r, std::optional<BodyAttitude>* a);
   static void put_image(ByteWriter& w, const ImageRecord& im);
@@ -84,6 +86,89 @@ Status NavFilterCheckpointAccess::get_time(ByteReader& r, MeasurementTime* t) {
   if (sensor > 0xFFFFu) return r.error("sensor_index " + std::to_string(sensor) + " > 65535");
   *t = MeasurementTime{a, b, c, static_cast<std::uint16_t>(sensor)};
   return Status::Ok();
+}
+
+static_assert(std::variant_size_v<Measurement> == 6, "a new measurement type: encode it below");
+
+void NavFilterCheckpointAccess::put_measurement(ByteWriter& w, const Measurement& m) {
+  w.u8(static_cast<std::uint8_t>(m.index()));
+  put_time(w, time_of(m));
+  if (const auto* x = std::get_if<DvlVelocity>(&m)) {
+    for (double v : x->v_sensor_mps) w.f64(v);
+  } else if (const auto* x = std::get_if<Attitude>(&m)) {
+    w.f64(x->roll_rad);
+    w.f64(x->pitch_rad);
+    w.f64(x->heading_rad);
+    w.u8(x->has_roll_pitch ? 1 : 0);
+    w.u8(x->has_heading ? 1 : 0);
+  } else if (const auto* x = std::get_if<AngularRate>(&m)) {
+    for (double v : x->omega_sensor_radps) w.f64(v);
+    for (bool b : x->has_axis) w.u8(b ? 1 : 0);
+  } else if (const auto* x = std::get_if<Depth>(&m)) {
+    w.f64(x->depth_m);
+  } else if (const auto* x = std::get_if<Altitude>(&m)) {
+    w.f64(x->altitude_m);
+  } else if (const auto* x = std::get_if<ImageEvent>(&m)) {
+    w.u64(x->frame_id);
+  }
+}
+
+Status NavFilterCheckpointAccess::get_measurement(ByteReader& r, Measurement* m) {
+  std::uint8_t kind = 0;
+  MeasurementTime t;
+  NAV_TRY(r.u8(&kind, "measurement kind"));
+  NAV_TRY(get_time(r, &t));
+  switch (kind) {
+    case 0: {
+      DvlVelocity x{t, {}};
+      for (double& v : x.v_sensor_mps) NAV_TRY(r.f64(&v, "DVL velocity"));
+      *m = x;
+      return Status::Ok();
+    }
+    case 1: {
+      Attitude x;
+      x.time = t;
+      NAV_TRY(r.f64(&x.roll_rad, "roll"));
+      NAV_TRY(r.f64(&x.pitch_rad, "pitch"));
+      NAV_TRY(r.f64(&x.heading_rad, "heading"));
+      NAV_TRY(get_bool(r, &x.has_roll_pitch, "has_roll_pitch"));
+      NAV_TRY(get_bool(r, &x.has_heading, "has_heading"));
+      *m = x;
+      return Status::Ok();
+    }
+    case 2: {
+      AngularRate x;
+      x.time = t;
+      for (double& v : x.omega_sensor_radps) NAV_TRY(r.f64(&v, "angular rate"));
+      for (std::size_t i = 0; i < 3; ++i) {
+        bool b = false;
+        NAV_TRY(get_bool(r, &b, "has_axis"));
+        x.has_axis[i] = b;
+      }
+      *m = x;
+      return Status::Ok();
+    }
+    case 3: {
+      Depth x{t, 0.0};
+      NAV_TRY(r.f64(&x.depth_m, "depth"));
+      *m = x;
+      return Status::Ok();
+    }
+    case 4: {
+      Altitude x{t, 0.0};
+      NAV_TRY(r.f64(&x.altitude_m, "altitude"));
+      *m = x;
+      return Status::Ok();
+    }
+    case 5: {
+      ImageEvent x{t, 0};
+      NAV_TRY(r.u64(&x.frame_id, "frame_id"));
+      *m = x;
+      return Status::Ok();
+    }
+    default:
+      return r.error("measurement kind " + std::to_string(kind) + " unknown");
+  }
 }
 
 void NavFilterCheckpointAccess::put_attitude(ByteWriter& w, const std::optional<BodyAttitude>& a) {
