@@ -179,6 +179,12 @@ void update_direction(double* P, const double* Z, const double* beta, std::ptrdi
   }
 }
 
+/// Capacity for `size` elements, growing by at least 1.5x: a filter that grows by one state per
+/// step reallocates O(log n) times, not every step.
+void reserve_growing(std::vector<double>& v, size_t size) {
+  if (v.capacity() < size) v.reserve(std::max(size, v.capacity() + v.capacity() / 2));
+}
+
 double* scratch(std::vector<double>& v, std::ptrdiff_t size) {
   if (static_cast<std::ptrdiff_t>(v.size()) < size) v.resize(static_cast<size_t>(size));
   return v.data();
@@ -193,6 +199,7 @@ int packed_width(int columns) { return (std::max(columns, 1) + kLanes - 1) / kLa
 void pack_columns(const Eigen::Ref<const Eigen::MatrixXd>& M, int width,
                   std::vector<double>* packed) {
   const Eigen::Index n = M.rows();
+  reserve_growing(*packed, static_cast<size_t>(n * width));
   packed->assign(static_cast<size_t>(n * width), 0.0);
   double* out = packed->data();
   for (Eigen::Index c = 0; c < M.cols(); ++c) {
@@ -311,14 +318,24 @@ PcgSummary solve_pcg_packed(const PackedBlockOperator& A, const PackedBlockJacob
   double* P = scratch(workspace.P, size);
   double* Q = scratch(workspace.Q, size);
   const auto w = static_cast<size_t>(width);
-  std::vector<double> xq(w), bx(w), bb(w), rz(w), rz_new(w), rr(w), pq(w), alpha(w, 0.0),
-      beta(w, 0.0);
-  std::vector<bool> active(w, false);
+  // Per-column scalars (width each) in the workspace: no allocation once it has grown.
+  workspace.scalars.assign(9 * w, 0.0);
+  workspace.active.assign(w, 0);
+  double* xq = workspace.scalars.data();
+  double* bx = xq + w;
+  double* bb = bx + w;
+  double* rz = bb + w;
+  double* rz_new = rz + w;
+  double* rr = rz_new + w;
+  double* pq = rr + w;
+  double* alpha = pq + w;
+  double* beta = alpha + w;
+  std::vector<char>& active = workspace.active;
 
   // R = B - A X (warm start); restart columns whose warm start is worse than zero (pcg.h).
-  A.multiply(X, Q, width, xq.data());
-  column_dots(B, X, n, width, bx.data());
-  column_dots(B, B, n, width, bb.data());
+  A.multiply(X, Q, width, xq);
+  column_dots(B, X, n, width, bx);
+  column_dots(B, B, n, width, bb);
   subtract(B, Q, R, size);
   for (int c = 0; c < columns; ++c) {
     if (options.restart_worse_than_zero && xq[c] - 2.0 * bx[c] > 0.0) {
@@ -329,9 +346,9 @@ PcgSummary solve_pcg_packed(const PackedBlockOperator& A, const PackedBlockJacob
       ++summary.restarted_columns;
     }
   }
-  M.apply(R, Z, width, rz.data());
+  M.apply(R, Z, width, rz);
   std::copy(Z, Z + size, P);
-  column_dots(R, R, n, width, rr.data());
+  column_dots(R, R, n, width, rr);
   auto column_done = [&](int c) {
     return options.relative_tolerance > 0.0 &&
            std::sqrt(rr[c]) <= options.relative_tolerance * std::sqrt(bb[c]);
@@ -344,7 +361,7 @@ PcgSummary solve_pcg_packed(const PackedBlockOperator& A, const PackedBlockJacob
 
   int iteration = 0;
   for (; iteration < options.max_iterations && active_count > 0; ++iteration) {
-    A.multiply(P, Q, width, pq.data());
+    A.multiply(P, Q, width, pq);
     for (int c = 0; c < width; ++c) {
       alpha[c] = 0.0;
       if (!active[c]) continue;
@@ -365,28 +382,28 @@ PcgSummary solve_pcg_packed(const PackedBlockOperator& A, const PackedBlockJacob
       }
       alpha[c] = rz[c] / pq[c];
     }
-    step_x_r(X, R, P, Q, alpha.data(), n, width, rr.data());
+    step_x_r(X, R, P, Q, alpha, n, width, rr);
     for (int c = 0; c < columns; ++c) {
       if (active[c] && column_done(c)) {
         active[c] = false;
         --active_count;
       }
     }
-    M.apply(R, Z, width, rz_new.data());
+    M.apply(R, Z, width, rz_new);
     for (int c = 0; c < width; ++c) {
       beta[c] = 0.0;
       if (!active[c]) continue;
       beta[c] = rz[c] > 0.0 ? rz_new[c] / rz[c] : 0.0;
       rz[c] = rz_new[c];
     }
-    update_direction(P, Z, beta.data(), n, width);
+    update_direction(P, Z, beta, n, width);
   }
   summary.iterations = iteration;
 
   if (options.recompute_true_residual) {
     A.multiply(X, Q, width);
     subtract(B, Q, R, size);
-    column_dots(R, R, n, width, rr.data());
+    column_dots(R, R, n, width, rr);
   }
   summary.residual_norm.resize(columns);
   summary.relative_residual.resize(columns);

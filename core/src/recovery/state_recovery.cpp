@@ -250,7 +250,11 @@ RecoveryResult StateRecovery::solve_packed(const InformationMatrix& lambda,
   const int width = packed_width(columns);
   const Eigen::Index n = solution_.rows();
   // B = [η | E_r] packed: η in column 0, the identity in the robot rows (block 0).
-  packed_rhs_.assign(static_cast<size_t>(n * width), 0.0);
+  const auto packed_size = static_cast<size_t>(n * width);
+  if (packed_rhs_.capacity() < packed_size) {
+    packed_rhs_.reserve(std::max(packed_size, packed_rhs_.capacity() * 3 / 2));
+  }
+  packed_rhs_.assign(packed_size, 0.0);
   for (Eigen::Index i = 0; i < n; ++i) packed_rhs_[static_cast<size_t>(i * width)] = eta[i];
   for (int r = 0; r < d; ++r) packed_rhs_[static_cast<size_t>(r * width + 1 + r)] = 1.0;
   pack_columns(solution_, width, &packed_solution_);

@@ -105,6 +105,8 @@ class PackedBlockJacobi {
 /// Scratch of a packed solve (reused; grows, never shrinks).
 struct PackedPcgWorkspace {
   std::vector<double> R, Z, P, Q;
+  std::vector<double> scalars;  // per-column α, β, dot products
+  std::vector<char> active;     // per-column "still iterating"
 };
 
 /// Multi-RHS PCG on packed matrices: exactly the algorithm of solve_pcg (pcg.h: per-column
