@@ -165,14 +165,13 @@ TEST(NavFilter, MeasurementWorkDoesNotGrowWithTheMap) {
   for (int w : dvl_blocks_written) EXPECT_LE(w, 1);
 }
 
-TEST(NavFilter, CountsMeasurementsBeforeInitialisationAndOutOfOrder) {
+TEST(NavFilter, StartsAtTheFirstMeasurementAndCountsOutOfOrder) {
   const NavdConfig config = sim_config();
   NavFilter f(config, nullptr, NavFilterOptions::from_config(config));
   DvlVelocity early;
   early.time.validity_us = 10;
   ASSERT_TRUE(f.process(early).ok());
   EXPECT_FALSE(f.initialised());
-  EXPECT_EQ(f.counters().before_initialisation, 1u);
   Attitude att;
   att.time.validity_us = 20;
   att.time.sensor_index = 1;
@@ -183,7 +182,10 @@ TEST(NavFilter, CountsMeasurementsBeforeInitialisationAndOutOfOrder) {
   d.depth_m = 12.0;
   ASSERT_TRUE(f.process(d).ok());
   EXPECT_TRUE(f.initialised());
-  EXPECT_NEAR(f.esdf().mean()(2), 12.0 + 0.2, 1e-12);  // sensor 0.2 m above the origin
+  EXPECT_EQ(f.time_us(), 10);  // started at the first measurement, the world origin
+  EXPECT_EQ(f.counters().before_initialisation, 0u);
+  EXPECT_EQ(f.counters().measurements, 3u);
+  EXPECT_NEAR(f.esdf().mean()(2), 12.0 + 0.2, 1e-3);  // sensor 0.2 m above the origin
   DvlVelocity late;
   late.time.validity_us = 25;
   ASSERT_TRUE(f.process(late).ok());

@@ -65,10 +65,12 @@ LcmConfig parse_lcm(const YamlReader& l) {
   if (!known) l.at("url").fail("'" + lcm.url + "' must start with udpm://, file:// or memq://");
   if (l.has("channels")) {
     const YamlReader c = l.at("channels");
-    c.expect_map({"nav_solution", "health", "bounds"});
+    c.expect_map({"nav_solution", "health", "bounds", "bounds_snapshot", "camera_links"});
     parse_channel(c, "nav_solution", lcm.nav_solution);
     parse_channel(c, "health", lcm.health);
     parse_channel(c, "bounds", lcm.bounds);
+    parse_channel(c, "bounds_snapshot", lcm.bounds_snapshot);
+    parse_channel(c, "camera_links", lcm.camera_links);
   }
   return lcm;
 }

@@ -15,6 +15,8 @@
 namespace nav::daemon {
 namespace {
 
+constexpr double kInitialSigmaFactor = 10.0;
+
 core::Status error(core::StatusCode code, const std::string& what) {
   return core::Status::Error(code, "NavFilter: " + what);
 }
@@ -54,7 +56,8 @@ NavFilter::NavFilter(const NavdConfig& config, const RegistrationTable* registra
       recovery_(12, options.recovery),
       bounds_(12, options.bounds),
       altitude_m_(options.default_altitude_m) {
-  if (!(options_.max_predict_step_s > 0.0) || !(options_.default_altitude_m > 0.0) ||
+  if (!(options_.max_predict_step_s > 0.0) ||
+      !(options_.min_predict_step_s >= 0.0 && options_.min_predict_step_s < options_.max_predict_step_s) || !(options_.default_altitude_m > 0.0) ||
       !(options_.proposal_confidence > 0.0 && options_.proposal_confidence < 1.0) ||
       !(options_.camera_gate_chi2 > 0.0) || !(options_.initial_xy_sigma_m > 0.0) ||
       !(options_.initial_velocity_sigma_mps > 0.0) || !(options_.initial_rate_sigma_radps > 0.0)) {
@@ -76,17 +79,29 @@ core::Status NavFilter::process(const Measurement& m) {
   ++counters_.measurements;
   const std::int64_t t_us = validity_us(m);
   if (!initialised_) return try_initialise(m);
-  if (t_us < time_us_) {
+  if (t_us < last_validity_us_) {
     ++counters_.out_of_order;
     return core::Status::Ok();
   }
-  if (core::Status s = advance_to(t_us); !s.ok()) return s;
+  last_validity_us_ = t_us;
+  // Measurements less than min_predict_step_s after the filter's time are applied at that time
+  // (nav_filter.h: a very short prediction makes Q's pose block tiny and Λ ill-conditioned).
+  const auto min_step_us = static_cast<std::int64_t>(std::llround(options_.min_predict_step_s * 1e6));
+  if (t_us - time_us_ >= min_step_us) {
+    if (core::Status s = advance_to(t_us); !s.ok()) return s;
+  }
   if (const auto* image = std::get_if<ImageEvent>(&m)) return on_image(*image);
   update_robot(m);
   return core::Status::Ok();
 }
 
 core::Status NavFilter::try_initialise(const Measurement& m) {
+  if (pre_init_.empty()) first_time_us_ = validity_us(m);
+  if (pre_init_.size() < kMaxPreInit) {
+    pre_init_.push_back(m);
+  } else {
+    ++counters_.before_initialisation;  // dropped: no attitude/depth for too long
+  }
   if (const auto* att = std::get_if<Attitude>(&m)) {
     const BodyAttitude body = sensors_.body_attitude(*att);
     if (body.has_roll_pitch) {
@@ -99,11 +114,17 @@ core::Status NavFilter::try_initialise(const Measurement& m) {
     }
   } else if (const auto* depth = std::get_if<Depth>(&m)) {
     init_depth_ = *depth;
-  } else if (const auto* alt = std::get_if<Altitude>(&m)) {
-    altitude_m_ = alt->altitude_m;
   }
-  if (init_roll_pitch_ && init_heading_ && init_depth_) return initialise(validity_us(m));
-  ++counters_.before_initialisation;
+  if (!(init_roll_pitch_ && init_heading_ && init_depth_)) return core::Status::Ok();
+  // The world origin is the vehicle at the start of the dive (hil-tests/README.md): start at
+  // the first measurement's time and replay everything held so far through the filter.
+  if (core::Status s = initialise(first_time_us_); !s.ok()) return s;
+  std::vector<Measurement> held;
+  held.swap(pre_init_);
+  counters_.measurements -= held.size();  // counted again below
+  for (const Measurement& h : held) {
+    if (core::Status s = process(h); !s.ok()) return s;
+  }
   return core::Status::Ok();
 }
 
@@ -121,8 +142,12 @@ core::Status NavFilter::initialise(std::int64_t t_us) {
       core::Vec3::Constant(options_.initial_velocity_sigma_mps),
       core::Vec3::Constant(options_.initial_rate_sigma_radps);
   // Attitude prior: the attitude sensor's own noise (the first message is a measurement).
-  sigma(3) = sigma(4) = std::sqrt(sensors_.roll_pitch_noise(init_rp_sensor_)(0, 0));
-  sigma(5) = std::sqrt(sensors_.heading_noise(init_heading_sensor_)(0, 0));
+  // Attitude and depth priors 10x the sensors' sigmas: the messages they come from are applied
+  // again as measurement updates once the held measurements are replayed.
+  sigma(2) *= kInitialSigmaFactor;
+  sigma(3) = sigma(4) =
+      kInitialSigmaFactor * std::sqrt(sensors_.roll_pitch_noise(init_rp_sensor_)(0, 0));
+  sigma(5) = kInitialSigmaFactor * std::sqrt(sensors_.heading_noise(init_heading_sensor_)(0, 0));
   const core::Mat12 P0 = sigma.array().square().matrix().asDiagonal();
   if (core::Status s = filter_.initialize(x0, P0); !s.ok()) return s;
   if (core::Status s = bounds_.initialize_robot(P0); !s.ok()) return s;
@@ -131,15 +156,22 @@ core::Status NavFilter::initialise(std::int64_t t_us) {
   P_robot_ = P0;
   initialised_ = true;
   time_us_ = t_us;
+  last_validity_us_ = t_us;
   return core::Status::Ok();
 }
 
 core::Status NavFilter::advance_to(std::int64_t t_us) {
-  const auto max_step_us = static_cast<std::int64_t>(std::llround(options_.max_predict_step_s * 1e6));
-  while (time_us_ < t_us) {
-    const std::int64_t step_us = std::min(t_us - time_us_, std::max<std::int64_t>(max_step_us, 1));
-    if (core::Status s = predict_once(static_cast<double>(step_us) * 1e-6); !s.ok()) return s;
-    time_us_ += step_us;
+  // Equal steps of at most max_predict_step_s (no short remainder step, see min_predict_step_s).
+  const auto max_step_us = std::max<std::int64_t>(
+      1, static_cast<std::int64_t>(std::llround(options_.max_predict_step_s * 1e6)));
+  const std::int64_t gap_us = t_us - time_us_;
+  const std::int64_t steps = (gap_us + max_step_us - 1) / max_step_us;
+  for (std::int64_t k = 1; k <= steps; ++k) {
+    const std::int64_t next_us = time_us_ + (t_us - time_us_) / (steps - k + 1);
+    if (core::Status s = predict_once(static_cast<double>(next_us - time_us_) * 1e-6); !s.ok()) {
+      return s;
+    }
+    time_us_ = next_us;
   }
   return core::Status::Ok();
 }
@@ -171,7 +203,9 @@ core::Status NavFilter::predict_once(double dt_s) {
       image_of_block_.resize(static_cast<std::size_t>(kept) + 1, -1);
     }
     image_of_block_[static_cast<std::size_t>(kept)] = pending_image_;
-    images_[static_cast<std::size_t>(pending_image_)].state = kept;
+    ImageRecord& kept_image = images_[static_cast<std::size_t>(pending_image_)];
+    kept_image.state = kept;
+    kept_image.initial_bound = bounds_.bound(kept).topLeftCorner(6, 6);
     for (std::size_t row : pending_links_) links_[row].state_j = kept;
     pending_links_.clear();
     pending_image_ = -1;
@@ -267,7 +301,9 @@ core::Status NavFilter::on_image(const ImageEvent& image) {
   record.altitude_m = altitude_m_;
   images_.push_back(record);
   ImageRecord& current = images_.back();
-  if (recover()) {
+  const bool recovered = recover();
+  current.relative_residual = last_relative_residual_;
+  if (recovered) {
     current.robot_covariance = recovery_.robot_covariance();
     if (options_.propose_links && sensors_.camera()) propose_and_link(current);
   }
@@ -301,7 +337,7 @@ bool NavFilter::recover() {
   ++counters_.recoveries;
   sigma_tt_ = recovery_.robot_covariance();  // the next extension starts from this iterate
   P_robot_ = sigma_tt_;
-  images_.back().relative_residual = result.max_relative_residual;
+  last_relative_residual_ = result.max_relative_residual;
   counters_.max_cg_relative_residual =
       std::max(counters_.max_cg_relative_residual, result.max_relative_residual);
   if (!result.status.ok()) {

@@ -100,6 +100,8 @@ LinkRecord NavFilter::try_link(const Proposal& p, const ImageRecord& current) {
     ++counters_.registration_failed;
     return link;
   }
+  link.z = reg->z;
+  link.covariance = reg->covariance;
   // Gate (nav_filter.h): ν = z − h(μ_i, μ_r), S = H J Hᵀ + R with H = [H_r H_i].
   const core::CameraRelativePoseModel& camera = *sensors_.camera();
   const auto& x_i = filter_.mean_block(block);
@@ -116,6 +118,7 @@ LinkRecord NavFilter::try_link(const Proposal& p, const ImageRecord& current) {
       const Eigen::Matrix<double, 5, 5> S = H * gate_joint(p.joint) * H.transpose() + reg->covariance;
       const Eigen::LDLT<Eigen::Matrix<double, 5, 5>> ldlt(S);
       const Eigen::Matrix<double, 5, 1> v = nu;
+      link.innovation = v;
       link.mahalanobis_sq = v.dot(ldlt.solve(v));
       if (ldlt.info() == Eigen::Success && std::isfinite(link.mahalanobis_sq) &&
           link.mahalanobis_sq <= options_.camera_gate_chi2) {

@@ -1,6 +1,8 @@
-// navd: the navigation daemon on the built-in simulated survey.
+// navd: the navigation daemon on the built-in simulated survey, or on a recorded dive.
 //   navd --config config/sim.yaml [--images N] [--seed S] [--speed X | --as-fast-as-possible]
 //        [--lcm-url URL] [--duration-s S]
+//   navd --config C --replay DIVE.lcmlog [--speed X | --as-fast-as-possible] [--out DIR]
+//        (replay_mode.h: NavFilter on the dive's measurements, published on LCM)
 // Threads: sim source -> MeasurementQueue -> filter (owns the Esdf) -> recovery (PCG), and a
 // LCM publisher. SIGTERM/SIGINT stop everything within a second (STOPPING=1), exit 0. At the
 // end (survey done, signal or --duration-s) one line of JSON goes to stdout (summary.h).
@@ -25,6 +27,7 @@
 #include "navd/mailboxes.h"
 #include "navd/publisher.h"
 #include "navd/recovery_worker.h"
+#include "navd/replay_mode.h"
 #include "navd/sim_source.h"
 #include "navd/summary.h"
 
@@ -42,6 +45,8 @@ struct Args {
   bool as_fast_as_possible = false;
   std::string lcm_url;
   double duration_s = 0.0;  ///< 0: until the survey ends
+  std::string replay;       ///< a dive log to replay instead of the built-in survey
+  std::string out_dir;      ///< replay output directory (with --replay)
 };
 
 void add_options(CLI::App& app, Args& args) {
@@ -54,6 +59,9 @@ void add_options(CLI::App& app, Args& args) {
   app.add_flag("--as-fast-as-possible", args.as_fast_as_possible, "replay without pacing")
       ->excludes(speed);
   app.add_option("--lcm-url", args.lcm_url, "LCM URL (overrides lcm.url)");
+  app.add_option("--replay", args.replay, "replay this dive log (hil-tests/README.md)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--out", args.out_dir, "with --replay: write the replay output directory");
   app.add_option("--duration-s", args.duration_s, "stop after this many seconds (0: no limit)")
       ->check(CLI::NonNegativeNumber);
 }
@@ -83,6 +91,11 @@ int wait_for_end(const sigset_t& signals, const std::atomic<bool>& done, double 
 int run(const Args& args) {
   daemon::NavdConfig config = daemon::load_config_file(args.config_path);
   if (!args.lcm_url.empty()) config.lcm.url = args.lcm_url;
+  if (!args.replay.empty()) {
+    const navd::ReplayModeArgs replay{args.replay, args.config_path, args.speed,
+                                      args.as_fast_as_possible, args.out_dir};
+    return navd::run_replay_mode(config, replay, block_stop_signals(), daemon::SdNotifier());
+  }
   core::sim::SurveyOptions survey_options;
   survey_options.num_images = args.images;
   survey_options.seed = args.seed;

@@ -141,7 +141,10 @@ struct LcmConfig {
   std::string url = "udpm://239.255.76.67:7667?ttl=0";
   LcmChannel nav_solution{"NAVD_SOLUTION", 10.0};
   LcmChannel health{"NAVD_HEALTH", 1.0};
-  LcmChannel bounds{"NAVD_BOUNDS", 0.2};
+  LcmChannel bounds{"NAVD_BOUNDS", 0.2};  ///< delayed_state_bound_t at each insert/tightening
+  LcmChannel bounds_snapshot{"NAVD_BOUNDS_SNAPSHOT", 0.2};  ///< bounds_snapshot_t at rate_hz
+  LcmChannel camera_links{"NAVD_CAMERA_LINKS", 1.0};  ///< camera_link_t per proposed pair
+                                                       ///< (event-driven; rate_hz unused)
 };
 
 struct CheckpointConfig {

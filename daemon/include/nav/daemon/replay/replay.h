@@ -1,0 +1,101 @@
+#pragma once
+// Replay of a recorded dive through the same code as navd on the vehicle (hil-tests/README.md):
+// dive-log source thread (run_dive_log_source: RAW_* through the sensor decoders, NAV_IMAGE) ->
+// MeasurementQueue -> TimeOrderingBuffer (filter.latency_window_ms) -> NavFilter, plus a second
+// NavFilter fed the same measurements without camera links (dead reckoning). Registrations
+// (NAV_REGISTRATION) are read before the replay (load_registrations), as the vision stage's
+// stand-in.
+//
+// Recovery runs synchronously inside NavFilter at each image, with the configured fixed PCG
+// iterations (filter.cg_iterations_per_step per image), so the result does not depend on thread
+// timing: as fast as possible, the same log and config give the same output.
+//
+// After the replay, analyse() computes what the replay output files need: the final mean
+// (direct solve), exact marginals (CHOLMOD + Takahashi), bound-vs-exact checks, and the Fig. 3
+// log-det ratios (ours and Markov blanket, robot vs every delayed state).
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "nav/daemon/config.h"
+#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/registration_table.h"
+#include "nav/daemon/sources/dive_log_source.h"
+#include "nav/daemon/time_ordering.h"
+
+namespace nav::daemon {
+
+struct ReplayOptions {
+  double speed = 1.0;               ///< x real time (> 0) unless as_fast_as_possible
+  bool as_fast_as_possible = true;
+  std::size_t queue_capacity = 4096;
+  bool dead_reckoning = true;       ///< also run the filter without links
+  /// Called on the filter thread after each measurement the SLAM filter processed (navd
+  /// publishes from here); must be quick.
+  std::function<void(const NavFilter&)> after_measurement;
+  /// Use this queue instead of an own one (navd's publisher reports its depth); not owned.
+  MeasurementQueue* queue = nullptr;
+  /// Set to stop the replay early (signal); the output is what was filtered so far.
+  const std::atomic<bool>* stop = nullptr;
+};
+
+struct ReplayRun {
+  std::string log_path;
+  std::unique_ptr<RegistrationTable> registrations;
+  std::unique_ptr<NavFilter> slam;
+  std::unique_ptr<NavFilter> dead_reckoning;  ///< null unless options.dead_reckoning
+  DiveLogSourceCounters source;
+  TimeOrderingStats ordering;
+  double wall_s = 0.0;      ///< source start to the last measurement filtered
+  double log_span_s = 0.0;  ///< host monotonic span of the log
+  std::string error;        ///< non-empty: the filter or the source failed (what, where)
+};
+
+/// Plays `log_path` through the filters. Throws DiveLogError / ConfigError / invalid_argument
+/// on unusable inputs; a filter failure mid-replay is reported in ReplayRun::error.
+ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
+                     const ReplayOptions& options);
+
+struct StateCheck {  ///< one delayed state at the end (states.csv)
+  int state = -1;
+  const ImageRecord* image = nullptr;
+  core::Vec12 mean = core::Vec12::Zero();   ///< final mean (direct solve)
+  Eigen::Matrix<double, 6, 6> bound, exact, initial_bound;  ///< pose parts
+  bool conservative = false;
+};
+
+struct LogdetRow {  ///< logdet.csv
+  int state_i = 0, state_j = 0;
+  double ours = 0.0, markov_blanket = 0.0;
+};
+
+struct ReplayAnalysis {
+  std::vector<StateCheck> states;
+  std::vector<LogdetRow> logdet;
+  core::Vec12 robot_mean = core::Vec12::Zero();  ///< final robot, direct solve
+  double conservative_fraction = 0.0;
+  double analysis_s = 0.0;
+  std::string error;
+};
+
+/// Final analysis of the SLAM filter (runs one more recovery step so the robot column is
+/// current; the filter is otherwise unchanged).
+ReplayAnalysis analyse(NavFilter& slam);
+
+/// The JSON summary (one line); keys listed in README.md ("navtool replay").
+std::string replay_summary_json(const ReplayRun& run, const ReplayAnalysis& analysis,
+                                const std::string& dive_dir, const std::string& config_path);
+
+/// Writes every file of hil-tests/README.md "Replay output directory" into `dir` (created).
+/// Throws std::runtime_error naming the file that cannot be written.
+void write_replay_outputs(const ReplayRun& run, const ReplayAnalysis& analysis,
+                          const std::string& summary_json, const std::string& dir);
+
+}  // namespace nav::daemon

@@ -1,0 +1,110 @@
+// run_replay: dive-log source thread -> queue -> time ordering -> NavFilter (+ dead reckoning).
+#include "nav/daemon/replay/replay.h"
+
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <chrono>
+#include <thread>
+
+#include "nav/daemon/measurement_queue.h"
+
+namespace nav::daemon {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// Feeds one time-ordered measurement to both filters; false (and run.error) on a failure.
+bool filter_one(ReplayRun& run, const Measurement& m,
+                const std::function<void(const NavFilter&)>& after) {
+  if (core::Status s = run.slam->process(m); !s.ok()) {
+    run.error = "SLAM filter at t = " + std::to_string(validity_us(m)) + " us: " + s.to_string();
+    return false;
+  }
+  if (after) after(*run.slam);
+  if (run.dead_reckoning) {
+    if (core::Status s = run.dead_reckoning->process(m); !s.ok()) {
+      run.error = "dead-reckoning filter at t = " + std::to_string(validity_us(m)) +
+                  " us: " + s.to_string();
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
+                     const ReplayOptions& options) {
+  ReplayRun run;
+  run.log_path = log_path;
+  run.registrations = std::make_unique<RegistrationTable>(load_registrations(log_path));
+  const NavFilterOptions filter_options = NavFilterOptions::from_config(config);
+  run.slam = std::make_unique<NavFilter>(config, run.registrations.get(), filter_options);
+  if (options.dead_reckoning) {
+    NavFilterOptions dr = filter_options;
+    dr.propose_links = false;
+    run.dead_reckoning = std::make_unique<NavFilter>(config, nullptr, dr);
+  }
+  TimeOrderingOptions ordering_options;
+  ordering_options.latency_window_us =
+      static_cast<std::int64_t>(config.filter.latency_window_ms * 1e3);
+  TimeOrderingBuffer ordering(ordering_options);
+  std::unique_ptr<MeasurementQueue> own_queue;
+  if (!options.queue) own_queue = std::make_unique<MeasurementQueue>(options.queue_capacity);
+  MeasurementQueue& queue = options.queue ? *options.queue : *own_queue;
+  DiveLogSourceOptions source_options;
+  source_options.speed = options.speed;
+  source_options.as_fast_as_possible = options.as_fast_as_possible;
+
+  std::atomic<bool> stop{false}, done{false};
+  std::string source_error;
+  const auto start = std::chrono::steady_clock::now();
+  std::thread source([&] {
+    try {
+      run.source = run_dive_log_source(log_path, config, source_options, queue, stop, done);
+    } catch (const std::exception& e) {
+      source_error = e.what();
+      done.store(true);
+    }
+  });
+  std::vector<Measurement> batch;
+  batch.reserve(256);
+  bool ok = true;
+  auto stopped = [&] { return options.stop && options.stop->load(); };
+  while (ok && !stopped()) {
+    const bool source_done = done.load();
+    batch.clear();
+    queue.pop_bulk(batch, 256);
+    for (const Measurement& m : batch) ordering.insert(m);
+    while (ok) {
+      std::optional<Measurement> m = ordering.pop_ready();
+      if (!m) break;
+      ok = filter_one(run, *m, options.after_measurement);
+    }
+    if (source_done && batch.empty() && queue.size() == 0) break;
+    if (batch.empty()) std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  while (ok && !stopped()) {
+    std::optional<Measurement> m = ordering.pop_any();
+    if (!m) break;
+    ok = filter_one(run, *m, options.after_measurement);
+  }
+  stop.store(true);
+  source.join();
+  if (ok) {
+    if (core::Status s = run.slam->finish(); !s.ok()) run.error = "SLAM finish: " + s.to_string();
+    if (run.dead_reckoning) (void)run.dead_reckoning->finish();
+  }
+  run.wall_s = seconds_since(start);
+  run.ordering = ordering.stats();
+  run.log_span_s =
+      1e-6 * static_cast<double>(run.source.last_monotonic_us - run.source.first_monotonic_us);
+  if (!source_error.empty()) run.error = "dive log " + log_path + ": " + source_error;
+  if (!run.error.empty()) spdlog::error("replay: {}", run.error);
+  return run;
+}
+
+}  // namespace nav::daemon
