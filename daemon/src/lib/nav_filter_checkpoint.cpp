@@ -206,6 +206,7 @@ void NavFilterCheckpointAccess::put_image(ByteWriter& w, const ImageRecord& im) 
   w.values(im.robot_mean);
   w.values(im.robot_covariance);
   w.f64(im.relative_residual);
+  w.values(im.initial_bound);
 }
 
 Status NavFilterCheckpointAccess::get_image(ByteReader& r, ImageRecord* im) {
@@ -215,7 +216,8 @@ Status NavFilterCheckpointAccess::get_image(ByteReader& r, ImageRecord* im) {
   NAV_TRY(r.f64(&im->altitude_m, "image altitude"));
   NAV_TRY(r.values(&im->robot_mean, "image robot mean"));
   NAV_TRY(r.values(&im->robot_covariance, "image robot covariance"));
-  return r.f64(&im->relative_residual, "image relative residual");
+  NAV_TRY(r.f64(&im->relative_residual, "image relative residual"));
+  return r.values(&im->initial_bound, "image initial bound");
 }
 
 void NavFilterCheckpointAccess::put_link(ByteWriter& w, const LinkRecord& l) {
@@ -227,6 +229,9 @@ void NavFilterCheckpointAccess::put_link(ByteWriter& w, const LinkRecord& l) {
   w.u8(static_cast<std::uint8_t>(l.outcome));
   w.f64(l.mahalanobis_sq);
   w.u8(l.is_outlier ? 1 : 0);
+  w.values(l.z);
+  w.values(l.covariance);
+  w.values(l.innovation);
 }
 
 Status NavFilterCheckpointAccess::get_link(ByteReader& r, LinkRecord* l) {
@@ -242,7 +247,10 @@ Status NavFilterCheckpointAccess::get_link(ByteReader& r, LinkRecord* l) {
   }
   l->outcome = static_cast<LinkOutcome>(outcome);
   NAV_TRY(r.f64(&l->mahalanobis_sq, "link mahalanobis_sq"));
-  return get_bool(r, &l->is_outlier, "link is_outlier");
+  NAV_TRY(get_bool(r, &l->is_outlier, "link is_outlier"));
+  NAV_TRY(r.values(&l->z, "link z"));
+  NAV_TRY(r.values(&l->covariance, "link covariance"));
+  return r.values(&l->innovation, "link innovation");
 }
 
 void NavFilterCheckpointAccess::put_counters(ByteWriter& w, const NavFilterCounters& c) {
@@ -281,6 +289,11 @@ std::vector<std::uint8_t> NavFilterCheckpointAccess::encode(const NavFilter& f) 
   ByteWriter w;
   w.u8(f.initialised_ ? 1 : 0);
   w.i64(f.time_us_);
+  w.i64(f.last_validity_us_);
+  w.i64(f.first_time_us_);
+  w.u32(static_cast<std::uint32_t>(f.pre_init_.size()));
+  for (const Measurement& m : f.pre_init_) put_measurement(w, m);
+  w.f64(f.last_relative_residual_);
   put_attitude(w, f.init_roll_pitch_);
   put_attitude(w, f.init_heading_);
   w.u8(f.init_depth_ ? 1 : 0);
@@ -321,6 +334,14 @@ std::vector<std::uint8_t> NavFilterCheckpointAccess::encode(const NavFilter& f) 
 Status NavFilterCheckpointAccess::decode(ByteReader& r, NavFilter* f) {
   NAV_TRY(get_bool(r, &f->initialised_, "initialised"));
   NAV_TRY(r.i64(&f->time_us_, "time_us"));
+  NAV_TRY(r.i64(&f->last_validity_us_, "last validity_us"));
+  NAV_TRY(r.i64(&f->first_time_us_, "first time_us"));
+  std::uint32_t held = 0;
+  NAV_TRY(r.u32(&held, "held measurement count"));
+  NAV_TRY(r.check_count(held, 29, "held measurement count"));
+  f->pre_init_.assign(held, Measurement{});
+  for (Measurement& m : f->pre_init_) NAV_TRY(get_measurement(r, &m));
+  NAV_TRY(r.f64(&f->last_relative_residual_, "last relative residual"));
   NAV_TRY(get_attitude(r, &f->init_roll_pitch_));
   NAV_TRY(get_attitude(r, &f->init_heading_));
   bool has_depth = false;
@@ -358,11 +379,11 @@ Status NavFilterCheckpointAccess::decode(ByteReader& r, NavFilter* f) {
   f->image_of_block_.assign(n, -1);
   for (long& i : f->image_of_block_) NAV_TRY(get_small_int(r, &i, "image of block"));
   NAV_TRY(r.u32(&n, "image count"));
-  NAV_TRY(r.check_count(n, 8 * (5 + 12 + 144), "image count"));
+  NAV_TRY(r.check_count(n, 8 * (5 + 12 + 144 + 36), "image count"));
   f->images_.assign(n, ImageRecord{});
   for (ImageRecord& im : f->images_) NAV_TRY(get_image(r, &im));
   NAV_TRY(r.u32(&n, "link count"));
-  NAV_TRY(r.check_count(n, 8 * 6 + 2, "link count"));
+  NAV_TRY(r.check_count(n, 8 * (6 + 35) + 2, "link count"));
   f->links_.assign(n, LinkRecord{});
   for (LinkRecord& l : f->links_) NAV_TRY(get_link(r, &l));
   NAV_TRY(r.u32(&n, "proposal count"));

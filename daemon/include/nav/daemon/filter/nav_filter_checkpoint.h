@@ -3,11 +3,13 @@
 // (ESDF, BNDS, RCVY) plus the "NAVF" section with everything else the filter carries between
 // measurements, so that a filter restored from a checkpoint and fed the same further
 // measurements stays bit-identical to the original:
-//   initialisation state (seen attitude/heading/depth), time, the warm-start extension since the
+//   initialisation state (seen attitude/heading/depth, measurements held until initialisation),
+//   time and newest validity, the warm-start extension since the
 //   last recovery (A, P_robot, Σ_tt, flags, kept block), the pending image and its links, the
 //   altitude in use, block -> image map, image records (trajectory), link history, proposal
 //   records, counters, and each attitude sensor's last angles (SensorModels).
-// Section "NAVF", version 1, little-endian (core/serialization/byte_io.h); the layout is the
+// Section "NAVF", version 2 (v2: held measurements, newest validity, link z/R/innovation,
+// images' initial bounds), little-endian (core/serialization/byte_io.h); the layout is the
 // order of the fields in nav_filter_checkpoint.cpp's encode(). Decoding checks every count
 // against the bytes present, every index against the filter (blocks, images, links, sensors).
 // The filter to restore into is built from the same config and options first (they are not in
@@ -22,7 +24,7 @@
 namespace nav::daemon {
 
 inline constexpr std::uint32_t kNavFilterSectionTag = core::section_tag("NAVF");
-inline constexpr std::uint32_t kNavFilterSectionVersion = 1;
+inline constexpr std::uint32_t kNavFilterSectionVersion = 2;
 
 /// Adds the ESDF, BNDS, RCVY and NAVF sections.
 core::Status add_nav_filter_sections(const NavFilter& filter, core::SectionWriter* writer);
