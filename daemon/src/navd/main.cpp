@@ -23,6 +23,7 @@
 #include "nav/daemon/config.h"
 #include "nav/daemon/measurement_queue.h"
 #include "nav/daemon/sd_notify.h"
+#include "navd/device_sources.h"
 #include "navd/filter_loop.h"
 #include "navd/mailboxes.h"
 #include "navd/publisher.h"
@@ -113,6 +114,8 @@ int run(const Args& args) {
   if (!publisher.good()) {
     spdlog::error("navd: cannot open LCM at '{}'; not publishing", config.lcm.url);
   }
+  navd::NavdDevices devices(config, queue);  // sensors with a hardware transport
+  devices.attach(publisher);
   navd::FilterLoop filter(survey, queue, ordering, inbox, outbox, board, notifier);
   navd::RecoveryWorker recovery(survey.x0_mean, survey.P0, config.filter.cg_iterations_per_step,
                                 inbox, outbox, board);
@@ -134,6 +137,7 @@ int run(const Args& args) {
   });
   std::thread recovery_thread([&] { recovery_counters = recovery.run(stop); });
   std::thread publisher_thread([&] { publisher_counters = publisher.run(stop); });
+  if (const std::size_t n = devices.start(stop); n > 0) spdlog::info("navd: {} device threads", n);
 
   const int sig = wait_for_end(signals, filter_done, args.duration_s, start_us);
   if (sig > 0) spdlog::info("navd: signal {}, stopping", sig);
@@ -142,6 +146,7 @@ int run(const Args& args) {
   for (std::thread* t : {&source_thread, &filter_thread, &recovery_thread, &publisher_thread}) {
     t->join();
   }
+  devices.join();
   const double wall_s = (navd::monotonic_us() - start_us) * 1e-6;
   const navd::SolutionView view = board.read();
   const double sigma_m = std::sqrt(view.robot_covariance.topLeftCorner<3, 3>().trace());

@@ -1,0 +1,116 @@
+// navd with a device sensor: an altimeter on a pseudo-terminal beside the built-in simulated
+// survey's sim sensors gets a device thread; its bytes go out on RAW_ALTIMETER_DEV and its
+// health in health_t.sensors (LCM udpm with ttl=0; skipped where multicast does not loop back).
+#include <gtest/gtest.h>
+#include <pty.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <lcm/lcm-cpp.hpp>
+#include <navlcm/health_t.hpp>
+#include <navlcm/raw_bytes_t.hpp>
+#include <thread>
+
+namespace nav::navd {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr const char* kUdpmUrl = "udpm://239.255.76.67:7671?ttl=0";
+
+fs::path sim_yaml() {
+  const fs::path rel = "config/sim.yaml";
+  const auto beside = fs::path(__FILE__).parent_path().parent_path().parent_path();
+  return fs::exists(beside / rel) ? beside / rel : rel;
+}
+
+struct Received {
+  int raw = 0;
+  navlcm::health_t health{};
+  bool have_sensor_health = false;
+  void on_raw(const lcm::ReceiveBuffer*, const std::string&, const navlcm::raw_bytes_t* m) {
+    if (m->device == "altimeter_dev") ++raw;
+  }
+  void on_health(const lcm::ReceiveBuffer*, const std::string&, const navlcm::health_t* m) {
+    if (m->num_sensors > 0) {
+      health = *m;
+      have_sensor_health = true;
+    }
+  }
+};
+
+/// True if a message published on udpm with ttl=0 comes back to this process.
+bool udpm_loops_back(lcm::LCM& lcm) {
+  bool received = false;
+  struct Probe {
+    bool* flag;
+    void on(const lcm::ReceiveBuffer*, const std::string&) { *flag = true; }
+  } probe{&received};
+  auto* sub = lcm.subscribe("NAVD_DEVICES_TEST_PROBE", &Probe::on, &probe);
+  const std::uint8_t byte = 1;
+  lcm.publish("NAVD_DEVICES_TEST_PROBE", &byte, 1);
+  for (int i = 0; i < 10 && !received; ++i) lcm.handleTimeout(50);
+  lcm.unsubscribe(sub);
+  return received;
+}
+
+TEST(NavdDevices, SerialSensorThreadPublishesRawBytesAndHealth) {
+  lcm::LCM lcm(kUdpmUrl);
+  if (!lcm.good()) GTEST_SKIP() << "LCM cannot open " << kUdpmUrl << " here (no multicast)";
+  if (!udpm_loops_back(lcm)) GTEST_SKIP() << "udpm ttl=0 does not loop back on this host";
+  int master = -1, slave = -1;
+  char name[256] = {};
+  ASSERT_EQ(::openpty(&master, &slave, name, nullptr, nullptr), 0);
+  ::close(slave);
+  const fs::path config =
+      fs::temp_directory_path() / ("navd_devices_" + std::to_string(::getpid()) + ".yaml");
+  {
+    std::ifstream in(sim_yaml());
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string sensor =
+        "sensors:\n  - name: altimeter_dev\n    type: altimeter\n"
+        "    transport: {type: serial, device: " +
+        std::string(name) + ", baud: 9600}\n    latency_ms: 30\n";
+    text.replace(text.find("sensors:\n"), 9, sensor);
+    std::ofstream(config) << text;
+  }
+  Received got;
+  lcm.subscribe("RAW_ALTIMETER_DEV", &Received::on_raw, &got);
+  lcm.subscribe("NAVD_HEALTH", &Received::on_health, &got);
+  std::atomic<bool> done{false};
+  std::thread sensor([&] {
+    const std::string line = "  3.42m\r\n";
+    while (!done.load()) {
+      (void)!::write(master, line.data(), line.size());
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  });
+  std::atomic<int> code{-1};
+  std::thread navd([&] {
+    const std::string cmd = std::string("'") + NAVD_PATH + "' --config '" + config.string() +
+                            "' --images 20 --speed 10 --duration-s 2.5 --lcm-url '" + kUdpmUrl +
+                            "' >/dev/null 2>&1";
+    const int status = std::system(cmd.c_str());
+    code.store(WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+    done.store(true);
+  });
+  while (!done.load()) lcm.handleTimeout(20);
+  for (int i = 0; i < 10; ++i) lcm.handleTimeout(20);
+  navd.join();
+  sensor.join();
+  ::close(master);
+  fs::remove(config);
+  ASSERT_EQ(code.load(), 0);
+  EXPECT_GT(got.raw, 5);
+  ASSERT_TRUE(got.have_sensor_health);
+  ASSERT_EQ(got.health.sensors.size(), 1u);  // the sim sensors have no device thread
+  EXPECT_EQ(got.health.sensors[0].name, "altimeter_dev");
+  EXPECT_GT(got.health.sensors[0].records, 5);
+  EXPECT_EQ(got.health.sensors[0].decode_errors, 0);
+}
+
+}  // namespace
+}  // namespace nav::navd
