@@ -5,9 +5,12 @@
 
 #include <atomic>
 #include <chrono>
+#include <optional>
 #include <thread>
 
+#include "nav/daemon/filter/nav_filter_checkpointer.h"
 #include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/resume_point.h"
 
 namespace nav::daemon {
 namespace {
@@ -16,14 +19,25 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-/// Feeds one time-ordered measurement to both filters; false (and run.error) on a failure.
+/// Checkpointing of the SLAM filter (ReplayOptions::checkpoints).
+struct Checkpointing {
+  std::optional<ResumeSkipper> skipper;
+  std::unique_ptr<NavFilterCheckpointer> checkpointer;
+};
+
+/// Feeds one time-ordered measurement to both filters (the SLAM filter only if its checkpoint
+/// does not hold it yet); false (and run.error) on a failure.
 bool filter_one(ReplayRun& run, const Measurement& m,
-                const std::function<void(const NavFilter&)>& after) {
-  if (core::Status s = run.slam->process(m); !s.ok()) {
-    run.error = "SLAM filter at t = " + std::to_string(validity_us(m)) + " us: " + s.to_string();
-    return false;
+                const std::function<void(const NavFilter&)>& after, Checkpointing& ckpt) {
+  const bool held = ckpt.skipper && ckpt.skipper->skip(m);
+  if (!held) {
+    if (core::Status s = run.slam->process(m); !s.ok()) {
+      run.error = "SLAM filter at t = " + std::to_string(validity_us(m)) + " us: " + s.to_string();
+      return false;
+    }
+    if (ckpt.checkpointer) ckpt.checkpointer->after_measurement(*run.slam, m);
+    if (after) after(*run.slam);
   }
-  if (after) after(*run.slam);
   if (run.dead_reckoning) {
     if (core::Status s = run.dead_reckoning->process(m); !s.ok()) {
       run.error = "dead-reckoning filter at t = " + std::to_string(validity_us(m)) +
@@ -47,6 +61,26 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
     NavFilterOptions dr = filter_options;
     dr.propose_links = false;
     run.dead_reckoning = std::make_unique<NavFilter>(config, nullptr, dr);
+  }
+  Checkpointing ckpt;
+  if (options.checkpoints) {
+    ResumedNavFilter resumed = resume_nav_filter(
+        config.checkpoint.path,
+        [&] { return std::make_unique<NavFilter>(config, run.registrations.get(), filter_options); },
+        log_path);
+    for (const SkippedCheckpoint& k : resumed.skipped) {
+      spdlog::warn("navd: checkpoint {} skipped: {}", k.path.string(), k.reason);
+    }
+    if (resumed.filter) {
+      run.slam = std::move(resumed.filter);
+      run.resumed_from = resumed.path.string();
+      run.resumed_measurements = resumed.point.applied;
+      ckpt.skipper.emplace(resumed.point);
+      spdlog::info("navd: resumed from {} ({} measurements applied)", run.resumed_from,
+                   resumed.point.applied);
+    }
+    ckpt.checkpointer =
+        std::make_unique<NavFilterCheckpointer>(config.checkpoint, resumed.point, log_path);
   }
   TimeOrderingOptions ordering_options;
   ordering_options.latency_window_us =
@@ -82,7 +116,7 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
     while (ok) {
       std::optional<Measurement> m = ordering.pop_ready();
       if (!m) break;
-      ok = filter_one(run, *m, options.after_measurement);
+      ok = filter_one(run, *m, options.after_measurement, ckpt);
     }
     if (source_done && batch.empty() && queue.size() == 0) break;
     if (batch.empty()) std::this_thread::sleep_for(std::chrono::microseconds(200));
@@ -90,10 +124,13 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
   while (ok && !stopped()) {
     std::optional<Measurement> m = ordering.pop_any();
     if (!m) break;
-    ok = filter_one(run, *m, options.after_measurement);
+    ok = filter_one(run, *m, options.after_measurement, ckpt);
   }
   stop.store(true);
   source.join();
+  // The shutdown checkpoint: the filter as it stands (before finish(), which only closes a
+  // pending image for the outputs).
+  if (ok && ckpt.checkpointer) ckpt.checkpointer->shutdown(*run.slam);
   if (ok) {
     if (core::Status s = run.slam->finish(); !s.ok()) run.error = "SLAM finish: " + s.to_string();
     if (run.dead_reckoning) (void)run.dead_reckoning->finish();

@@ -48,6 +48,7 @@ struct Args {
   double duration_s = 0.0;  ///< 0: until the survey ends
   std::string replay;       ///< a dive log to replay instead of the built-in survey
   std::string out_dir;      ///< replay output directory (with --replay)
+  bool checkpoints = false;  ///< with --replay: resume from / write checkpoints
 };
 
 void add_options(CLI::App& app, Args& args) {
@@ -63,6 +64,9 @@ void add_options(CLI::App& app, Args& args) {
   app.add_option("--replay", args.replay, "replay this dive log (hil-tests/README.md)")
       ->check(CLI::ExistingFile);
   app.add_option("--out", args.out_dir, "with --replay: write the replay output directory");
+  app.add_flag("--checkpoints", args.checkpoints,
+               "with --replay: resume from the newest valid checkpoint of this log in "
+               "checkpoint.path and write checkpoints there (checkpoint.period_s, at the end)");
   app.add_option("--duration-s", args.duration_s, "stop after this many seconds (0: no limit)")
       ->check(CLI::NonNegativeNumber);
 }
@@ -94,7 +98,8 @@ int run(const Args& args) {
   if (!args.lcm_url.empty()) config.lcm.url = args.lcm_url;
   if (!args.replay.empty()) {
     const navd::ReplayModeArgs replay{args.replay, args.config_path, args.speed,
-                                      args.as_fast_as_possible, args.out_dir};
+                                      args.as_fast_as_possible, args.out_dir,
+                                      args.checkpoints};
     return navd::run_replay_mode(config, replay, block_stop_signals(), daemon::SdNotifier());
   }
   core::sim::SurveyOptions survey_options;

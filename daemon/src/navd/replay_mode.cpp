@@ -46,6 +46,7 @@ int run_replay_mode(const daemon::NavdConfig& config, const ReplayModeArgs& args
   options.as_fast_as_possible = args.as_fast_as_possible;
   options.queue = &queue;
   options.stop = &stop;
+  options.checkpoints = args.checkpoints;
   options.after_measurement = [&](const daemon::NavFilter& filter) {
     map_publisher.on_measurement(filter);
     const auto period = notifier.watchdog_period();

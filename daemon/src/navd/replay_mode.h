@@ -20,6 +20,7 @@ struct ReplayModeArgs {
   double speed = 1.0;
   bool as_fast_as_possible = false;
   std::string out_dir;
+  bool checkpoints = false;  ///< --checkpoints: resume from / write checkpoint.path
 };
 
 int run_replay_mode(const daemon::NavdConfig& config, const ReplayModeArgs& args,

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "nav/daemon/checkpoint.h"
@@ -25,6 +26,9 @@
 namespace nav::daemon {
 
 inline constexpr std::uint32_t kNavFilterPayloadVersion = 1;
+/// "IDNT": what the checkpointed filter was fed (e.g. the replayed dive log), so that a
+/// checkpoint of another input is never resumed.
+inline constexpr std::uint32_t kInputIdentitySectionTag = core::section_tag("IDNT");
 
 struct ResumedNavFilter {
   std::unique_ptr<NavFilter> filter;       ///< null when no checkpoint could be resumed
@@ -35,18 +39,21 @@ struct ResumedNavFilter {
 
 /// The newest checkpoint in `dir` that verifies and decodes into a filter made by `make`
 /// (built from the current config); newer corrupt, truncated or undecodable ones are listed
-/// in `skipped`.
+/// in `skipped`. A checkpoint whose input identity differs from `identity` is skipped too.
 ResumedNavFilter resume_nav_filter(const std::filesystem::path& dir,
-                                   const std::function<std::unique_ptr<NavFilter>()>& make);
+                                   const std::function<std::unique_ptr<NavFilter>()>& make,
+                                   const std::string& identity = "");
 
-/// The checkpoint payload of `filter` at `point`.
-std::vector<std::uint8_t> nav_filter_payload(const NavFilter& filter, const ResumePoint& point);
+/// The checkpoint payload of `filter` at `point`, fed the input named `identity`.
+std::vector<std::uint8_t> nav_filter_payload(const NavFilter& filter, const ResumePoint& point,
+                                             const std::string& identity = "");
 
 class NavFilterCheckpointer {
  public:
   /// Starts the checkpoint thread on config.path (throws std::runtime_error if unusable).
   /// `start` is the resume point of a resumed filter (default: nothing applied yet).
-  explicit NavFilterCheckpointer(const CheckpointConfig& config, ResumePoint start = {});
+  explicit NavFilterCheckpointer(const CheckpointConfig& config, ResumePoint start = {},
+                                 std::string identity = "");
 
   /// After the filter processed `m`: tracks it and offers a checkpoint when period_s of wall
   /// time has passed since the last one.
@@ -61,6 +68,7 @@ class NavFilterCheckpointer {
   std::chrono::steady_clock::duration period_;
   std::chrono::steady_clock::time_point last_;
   AppliedTracker tracker_;
+  std::string identity_;
   CheckpointWorker worker_;
 };
 

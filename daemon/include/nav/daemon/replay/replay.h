@@ -44,6 +44,11 @@ struct ReplayOptions {
   MeasurementQueue* queue = nullptr;
   /// Set to stop the replay early (signal); the output is what was filtered so far.
   const std::atomic<bool>* stop = nullptr;
+  /// navd: checkpoint the SLAM filter (config.checkpoint: path, period_s, keep; payload tagged
+  /// with the log path) and resume from the newest valid checkpoint of this log, skipping the
+  /// measurements it holds (filter/nav_filter_checkpointer.h). The dead-reckoning twin is not
+  /// checkpointed: it is fed every measurement, skipped or not.
+  bool checkpoints = false;
 };
 
 struct ReplayRun {
@@ -56,6 +61,8 @@ struct ReplayRun {
   double wall_s = 0.0;      ///< source start to the last measurement filtered
   double log_span_s = 0.0;  ///< host monotonic span of the log
   std::string error;        ///< non-empty: the filter or the source failed (what, where)
+  std::string resumed_from;             ///< checkpoint file resumed ("" if none)
+  std::uint64_t resumed_measurements = 0;  ///< measurements that checkpoint held (skipped)
 };
 
 /// Plays `log_path` through the filters. Throws DiveLogError / ConfigError / invalid_argument

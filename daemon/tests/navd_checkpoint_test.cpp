@@ -1,0 +1,106 @@
+// navd checkpoints end to end (issue "navd" §6, §7): a simulated dive (navtool simulate) replayed
+// by the real navd with --checkpoints at 100x real time is killed with SIGKILL at random points
+// and restarted each time; the last start finishes the dive. Its replay output (delayed states
+// with bounds, links, trajectory) must equal an uninterrupted run's, with every delayed state,
+// and the restarts must have resumed from checkpoints. Before the last start the newest
+// checkpoint is truncated: navd reports it with the reason and resumes from the previous one.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <thread>
+
+#include "nav/daemon/checkpoint.h"
+#include "support/navtool_run.h"
+
+namespace nav::tool::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Starts `command` with /bin/sh (which execs navd, so the pid is navd's).
+pid_t start_shell(const std::string& command) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
+
+int wait_status(pid_t pid) {
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+}
+
+TEST(NavdCheckpoints, KilledReplayResumesToTheUninterruptedMap) {
+  const fs::path root = fs::temp_directory_path() / ("navd_ckpt_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root);
+  const std::string dive = (root / "dive").string();
+  ASSERT_EQ(run_navtool("simulate --out '" + dive + "' --images 20 --seed 5").exit_code, 0);
+  // The dive's config with the checkpoints in this test's directory, every 0.1 s of wall time.
+  std::string config = read_text(dive + "/config.yaml");
+  const std::string old_path = "path: /tmp/navd-sim/checkpoints";
+  const auto at = config.find(old_path);
+  ASSERT_NE(at, std::string::npos) << "simulated config.yaml changed";
+  config.replace(at, old_path.size(), "path: " + (root / "checkpoints").string());
+  const auto period = config.find("period_s: 30");
+  ASSERT_NE(period, std::string::npos);
+  config.replace(period, 12, "period_s: 0.1");
+  std::ofstream(root / "config.yaml") << config;
+
+  auto navd = [&](const std::string& extra, const std::string& out, const std::string& log) {
+    return "exec '" + std::string(NAVD_PATH) + "' --config '" + (root / "config.yaml").string() +
+           "' --lcm-url memq:// --replay '" + dive + "/dive.lcmlog' " + extra + " --out '" +
+           (root / out).string() + "' > /dev/null 2>> '" + (root / log).string() + "'";
+  };
+  ASSERT_EQ(wait_status(start_shell(navd("--as-fast-as-possible", "reference", "ref.err"))), 0)
+      << read_text(root / "ref.err");
+
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> when_s(0.4, 2.4);  // the paced run takes ~2.8 s
+  int kills = 0;
+  for (int i = 0; i < 4; ++i) {
+    const pid_t pid = start_shell(navd("--speed 100 --checkpoints", "killed", "runs.err"));
+    std::this_thread::sleep_for(std::chrono::duration<double>(when_s(rng)));
+    ::kill(pid, SIGKILL);
+    const int code = wait_status(pid);
+    if (code == -SIGKILL) ++kills;
+    ASSERT_TRUE(code == 0 || code == -SIGKILL) << code << read_text(root / "runs.err");
+  }
+  EXPECT_GE(kills, 3);
+  const std::vector<std::uint64_t> seqs = nav::daemon::list_checkpoints(root / "checkpoints");
+  ASSERT_GE(seqs.size(), 2u) << read_text(root / "runs.err");
+  const fs::path newest = nav::daemon::checkpoint_path(root / "checkpoints", seqs.back());
+  fs::resize_file(newest, fs::file_size(newest) - 100);
+  ASSERT_EQ(
+      wait_status(start_shell(navd("--as-fast-as-possible --checkpoints", "final", "final.err"))),
+      0)
+      << read_text(root / "final.err");
+  const std::string runs = read_text(root / "runs.err"), last = read_text(root / "final.err");
+  std::printf("%d kills; resumes: %s", kills, runs.c_str());
+  EXPECT_NE(runs.find("resumed from"), std::string::npos) << runs;
+  EXPECT_NE(last.find(newest.filename().string() + " skipped: truncated"), std::string::npos)
+      << last;
+  EXPECT_NE(last.find("resumed from"), std::string::npos) << last;
+  for (const char* file : {"states.csv", "links.csv", "trajectory.csv", "proposals.csv",
+                           "dead_reckoning.csv", "information_blocks.csv"}) {
+    const std::string expected = read_text(root / "reference" / file);
+    EXPECT_FALSE(expected.empty()) << file;
+    EXPECT_EQ(read_text(root / "final" / file), expected) << file << " differs";
+  }
+  // Every delayed state is there: one states.csv row per image (plus the header).
+  EXPECT_EQ(lines_of(read_text(root / "final" / "states.csv")).size(), 21u);
+  std::error_code ignored;
+  fs::remove_all(root, ignored);
+}
+
+}  // namespace
+}  // namespace nav::tool::test
