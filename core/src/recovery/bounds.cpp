@@ -200,7 +200,10 @@ Status CovarianceBounds::update_robot(const Eigen::MatrixXd& H, const Eigen::Mat
     return Status::Error(StatusCode::kNotPositiveDefinite,
                          "CovarianceBounds::update_robot: innovation covariance not SPD");
   }
-  set_robot_bound(posterior);
+  // A Kalman update only shrinks the bound (B+ <= B), so the stored λmax(B) stays a valid upper
+  // bound of λmax(B+) for L and ε (bounds.h C1): no eigen-solve per measurement. It is
+  // recomputed at the next predict_robot / set_recovery.
+  robot_bound_ = symmetric(posterior);
   return Status::Ok();
 }
 
