@@ -4,6 +4,8 @@
 // with bounds, links, trajectory) must equal an uninterrupted run's, with every delayed state,
 // and the restarts must have resumed from checkpoints. Before the last start the newest
 // checkpoint is truncated: navd reports it with the reason and resumes from the previous one.
+// SIGTERM writes the shutdown checkpoint (no periodic one falls in the run), which the next
+// start resumes.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -98,6 +100,42 @@ TEST(NavdCheckpoints, KilledReplayResumesToTheUninterruptedMap) {
   }
   // Every delayed state is there: one states.csv row per image (plus the header).
   EXPECT_EQ(lines_of(read_text(root / "final" / "states.csv")).size(), 21u);
+  std::error_code ignored;
+  fs::remove_all(root, ignored);
+}
+
+TEST(NavdCheckpoints, SigtermWritesTheShutdownCheckpoint) {
+  const fs::path root =
+      fs::temp_directory_path() / ("navd_ckpt_term_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root);
+  const std::string dive = (root / "dive").string();
+  ASSERT_EQ(run_navtool("simulate --out '" + dive + "' --images 10 --seed 6").exit_code, 0);
+  // No periodic checkpoint within the run (period 1000 s): only the shutdown one.
+  std::string config = read_text(dive + "/config.yaml");
+  const std::string old_path = "path: /tmp/navd-sim/checkpoints";
+  const auto at = config.find(old_path);
+  ASSERT_NE(at, std::string::npos);
+  config.replace(at, old_path.size(), "path: " + (root / "checkpoints").string());
+  const auto period = config.find("period_s: 30");
+  ASSERT_NE(period, std::string::npos);
+  config.replace(period, 12, "period_s: 1000");
+  std::ofstream(root / "config.yaml") << config;
+  const std::string command = "exec '" + std::string(NAVD_PATH) + "' --config '" +
+                              (root / "config.yaml").string() + "' --lcm-url memq:// --replay '" +
+                              dive + "/dive.lcmlog' --speed 50 --checkpoints > /dev/null 2>> '" +
+                              (root / "err.txt").string() + "'";
+  const pid_t pid = start_shell(command);
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  ::kill(pid, SIGTERM);
+  EXPECT_EQ(wait_status(pid), 0) << read_text(root / "err.txt");
+  EXPECT_EQ(nav::daemon::list_checkpoints(root / "checkpoints").size(), 1u);
+  const pid_t again = start_shell(command);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  ::kill(again, SIGTERM);
+  EXPECT_EQ(wait_status(again), 0);
+  const std::string err = read_text(root / "err.txt");
+  EXPECT_NE(err.find("resumed from"), std::string::npos) << err;
   std::error_code ignored;
   fs::remove_all(root, ignored);
 }
