@@ -6,6 +6,7 @@
 
 #include <Eigen/Dense>
 
+#include <cmath>
 #include <random>
 
 #include "nav/core/posegraph/g2o.h"
@@ -145,6 +146,56 @@ TEST(StateRecovery, ModesAgreeWithDenseSolution) {
     EXPECT_LT(r.max_relative_residual, previous);
     previous = r.max_relative_residual;
   }
+}
+
+/// SPD matrix with eigenvalues log-spaced in [1, condition] and random eigenvectors: across
+/// blocks, so block Jacobi cannot undo it.
+Eigen::MatrixXd ill_conditioned_spd(int n, double condition, unsigned seed) {
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(random_matrix(n, n, seed));
+  const Eigen::MatrixXd U = qr.householderQ();
+  Eigen::VectorXd eig(n);
+  for (int i = 0; i < n; ++i) eig[i] = std::pow(condition, static_cast<double>(i) / (n - 1));
+  const Eigen::MatrixXd A = U * eig.asDiagonal() * U.transpose();
+  return 0.5 * (A + A.transpose());
+}
+
+TEST(StateRecovery, ToleranceModeReturnsOkAtTheIterationCapWithTheResidualReached) {
+  const int d = 6, n = 12 * d;
+  const Eigen::MatrixXd lambda = ill_conditioned_spd(n, 1e10, 21);
+  const Eigen::VectorXd eta = random_matrix(n, 1, 22);
+  const CsrMatrix csr = lambda.sparseView();
+  for (int cap : {3, 10}) {
+    StateRecoveryOptions options;
+    options.mode = RecoveryMode::kTolerance;
+    options.relative_tolerance = 1e-14;
+    options.max_iterations = cap;
+    StateRecovery recovery(d, options);
+    ASSERT_TRUE(recovery.set_solution(Eigen::MatrixXd::Zero(n, 1 + d)).ok());
+    const RecoveryResult r = recovery.solve(csr, eta);
+    ASSERT_TRUE(r.status.ok()) << "cap " << cap << ": " << r.status.to_string();
+    EXPECT_TRUE(r.hit_iteration_cap) << "cap " << cap;
+    EXPECT_EQ(r.iterations, cap);
+    EXPECT_GT(r.max_relative_residual, 1e-14);
+    // The reported residual is the true one of the iterate handed back.
+    const Eigen::MatrixXd column_residual =
+        Eigen::MatrixXd::Identity(n, d) - lambda * recovery.robot_column();
+    EXPECT_NEAR(r.column_residual_frobenius, column_residual.norm(),
+                1e-9 * column_residual.norm());
+    const double mean_residual = (eta - lambda * recovery.mean()).norm() / eta.norm();
+    EXPECT_NEAR(r.mean_relative_residual, mean_residual, 1e-9 * mean_residual);
+  }
+  // A reachable tolerance (well-conditioned matrix) does not report the cap.
+  const Eigen::MatrixXd easy = ill_conditioned_spd(n, 1e3, 23);
+  StateRecoveryOptions options;
+  options.mode = RecoveryMode::kTolerance;
+  options.relative_tolerance = 1e-6;
+  options.max_iterations = 5000;
+  StateRecovery recovery(d, options);
+  ASSERT_TRUE(recovery.set_solution(Eigen::MatrixXd::Zero(n, 1 + d)).ok());
+  const RecoveryResult r = recovery.solve(CsrMatrix(easy.sparseView()), eta);
+  ASSERT_TRUE(r.status.ok()) << r.status.to_string();
+  EXPECT_FALSE(r.hit_iteration_cap);
+  EXPECT_LE(r.max_relative_residual, 1e-6);
 }
 
 TEST(StateRecovery, RejectsMismatchedSnapshotAndBadOptions) {

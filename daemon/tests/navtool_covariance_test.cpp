@@ -112,6 +112,26 @@ TEST(NavtoolCovariance, SmallGridFixedBudgetStaysConservative) {
   EXPECT_GT(j["markov_blanket_overconfident_fraction"].get<double>(), 0.5);
 }
 
+TEST(NavtoolCovariance, ToleranceModeAtTheIterationCapSucceedsAndCountsTheCappedSteps) {
+  NAV_REQUIRE_DATA(path, "posegraphs/smallGrid3D.g2o");
+  const RunResult r =
+      run_navtool(args_for(path.string(), "--json --tolerance 1e-15 --max-iterations 2"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["mode"], "tolerance");
+  EXPECT_EQ(j["max_iterations_per_step"], 2);
+  EXPECT_EQ(j["relative_tolerance"].get<double>(), 1e-15);
+  EXPECT_GT(j["capped_steps"].get<int>(), 100);
+  EXPECT_LE(j["capped_steps"].get<int>(), j["steps"].get<int>());
+  EXPECT_GT(j["max_relative_residual"].get<double>(), 1e-6);
+  EXPECT_GE(j["max_relative_residual"].get<double>(),
+            j["relative_residual_median"].get<double>());
+  EXPECT_EQ(j["conservative_checked"], 125);
+  EXPECT_EQ(j["conservative_fraction"], 1.0);
+  // --max-iterations only means something with --tolerance.
+  EXPECT_NE(run_navtool(args_for(path.string(), "--json --max-iterations 2")).exit_code, 0);
+}
+
 TEST(NavtoolCovariance, ChainGraphWithLoopClosure) {
   const std::string file = write_graph(
       "chain.g2o", kVertices + "EDGE_SE3:QUAT 0 1 1 0 0 0 0 0 1" + kInfo +

@@ -20,8 +20,12 @@
 // Σ_tt is symmetrised before use (a truncated CG column is not exactly symmetric).
 //
 // Modes: a fixed number of PCG iterations per step (the paper's real-time mode; the result is
-// approximate, the residual says how much), PCG to a relative-residual tolerance, and a direct
-// CHOLMOD solve (reference). Every solve reports the relative residual of each column and the
+// approximate, the residual says how much), PCG to a relative-residual tolerance OR an
+// iteration cap per step (max_iterations), and a direct CHOLMOD solve (reference). Reaching the
+// cap is NOT an error: on a badly conditioned Λ (parking-garage: condition number ~2e14, ~1e9
+// block-Jacobi preconditioned) PCG may stagnate far above a tight tolerance. The solve then
+// returns ok with hit_iteration_cap set and the residual it reached; the certified bounds
+// (bounds.h) take that residual as input and stay conservative whatever its size (only looser). Every solve reports the relative residual of each column and the
 // Frobenius norm of the true residual of the covariance columns, which the covariance bounds
 // (bounds.h) turn into a certified error bound.
 //
@@ -40,7 +44,8 @@ namespace nav::core {
 
 enum class RecoveryMode {
   kFixedIterations,  ///< exactly `iterations_per_step` PCG iterations (real-time mode)
-  kTolerance,        ///< PCG until every column meets `relative_tolerance` (or max_iterations)
+  kTolerance,        ///< PCG until every column meets `relative_tolerance` or max_iterations
+                     ///< is reached (ok either way; RecoveryResult::hit_iteration_cap)
   kDirect,           ///< CHOLMOD supernodal Cholesky of the snapshot (reference; O(fill))
 };
 
@@ -65,7 +70,8 @@ struct StateRecoveryOptions {
   int iterations_per_step = 5;
   /// kTolerance: stop when ‖b_c - Λ x_c‖ <= relative_tolerance ‖b_c‖ for every column, > 0.
   double relative_tolerance = 1e-10;
-  /// kTolerance: iteration cap, >= 1 (the summary says if it was hit).
+  /// kTolerance: iteration cap per solve, >= 1. Hitting it is not an error: the result holds
+  /// the iterate reached, hit_iteration_cap and the residual (the bounds certify from it).
   int max_iterations = 5000;
   /// Solver of the PCG modes on an InformationMatrix (CSR snapshots always use pcg.h).
   RecoveryKernel kernel = RecoveryKernel::kPacked;
@@ -77,6 +83,9 @@ struct RecoveryResult {
   Status status;
   RecoveryMode mode = RecoveryMode::kFixedIterations;
   int iterations = 0;                    ///< PCG iterations (0 for kDirect)
+  /// kTolerance only: the cap (max_iterations) stopped PCG before every column met the
+  /// tolerance. status stays ok; the residuals below say what was reached.
+  bool hit_iteration_cap = false;
   double mean_relative_residual = 0.0;   ///< ‖η - Λμ‖ / ‖η‖
   double column_relative_residual = 0.0; ///< max_c ‖e_c - Λσ_c‖ / ‖e_c‖ over the Σ_{*r} columns
   double max_relative_residual = 0.0;    ///< max of the two above
@@ -139,7 +148,7 @@ class StateRecovery {
   RecoveryResult solve_with(const SpdOperator& A, const Eigen::VectorXd& eta);
   RecoveryResult solve_packed(const InformationMatrix& lambda, const Eigen::VectorXd& eta);
   PcgOptions pcg_options() const;
-  void check_convergence(RecoveryResult& result, const PcgSummary& summary) const;
+  void note_convergence(RecoveryResult& result, const PcgSummary& summary) const;
   RecoveryResult solve_direct(const Eigen::SparseMatrix<double>& lambda,
                               const Eigen::VectorXd& eta);
   Status check_snapshot(Eigen::Index n, Eigen::Index eta_size) const;
