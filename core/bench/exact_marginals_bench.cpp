@@ -31,7 +31,8 @@ const Eigen::SparseMatrix<double>* information_of(const std::string& graph) {
 }
 
 void BM_ExactMarginals(benchmark::State& state, const std::string& graph,
-                       nav::core::MarginalsOrdering ordering) {
+                       nav::core::MarginalsOrdering ordering,
+                       nav::core::MarginalsKernel kernel = nav::core::MarginalsKernel::kAuto) {
   const Eigen::SparseMatrix<double>* Lambda = information_of(graph);
   if (Lambda == nullptr) {
     state.SkipWithError(("data file posegraphs/" + graph + ".g2o absent").c_str());
@@ -39,7 +40,7 @@ void BM_ExactMarginals(benchmark::State& state, const std::string& graph,
   }
   double factor_ms = 0.0, inversion_ms = 0.0, nnz = 0.0, checksum = 0.0;
   for (auto _ : state) {
-    const ExactMarginals em = ExactMarginals::compute(*Lambda, 6, ordering);
+    const ExactMarginals em = ExactMarginals::compute(*Lambda, 6, ordering, kernel);
     // Read every diagonal block, as a consumer would.
     for (int b = 0; b < em.num_blocks(); ++b) checksum += em.marginal(b).trace();
     factor_ms = em.factor_ms();
@@ -51,6 +52,9 @@ void BM_ExactMarginals(benchmark::State& state, const std::string& graph,
   state.counters["factor_ms"] = factor_ms;
   state.counters["inversion_ms"] = inversion_ms;
   state.counters["nnz_L"] = nnz;
+  state.SetLabel(kernel == nav::core::MarginalsKernel::kBaseline
+                     ? "baseline"
+                     : nav::core::auto_marginals_kernel_name());
 }
 
 void BM_DenseInverse(benchmark::State& state, const std::string& graph) {
@@ -80,6 +84,13 @@ BENCHMARK_CAPTURE(BM_ExactMarginals, parking_garage, std::string("parking-garage
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_ExactMarginals, sphere2500, std::string("sphere2500"),
                   MarginalsOrdering::kBlockAmd)
+    ->Unit(benchmark::kMillisecond);
+// Same AMD ordering with the baseline (SSE2) dense kernels: the runtime-dispatch speed-up.
+BENCHMARK_CAPTURE(BM_ExactMarginals, parking_garage_baseline_kernel, std::string("parking-garage"),
+                  MarginalsOrdering::kBlockAmd, nav::core::MarginalsKernel::kBaseline)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_ExactMarginals, sphere2500_baseline_kernel, std::string("sphere2500"),
+                  MarginalsOrdering::kBlockAmd, nav::core::MarginalsKernel::kBaseline)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_ExactMarginals, parking_garage_cholmod_ordering, std::string("parking-garage"),
                   MarginalsOrdering::kCholmodAuto)

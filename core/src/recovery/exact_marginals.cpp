@@ -11,9 +11,13 @@
 //   Y = Sigma_RR L_RJ U,  Sigma_RJ = -Y,  Sigma_JJ = U^T U + Y^T (L_RJ U).
 // This is the header's recurrence rearranged so the diagonal block costs ~2/3 nc^3 + 3 nr nc^2
 // instead of two full triangular solves (2 nc^3); it matters for the dense root separator
-// (600 columns on sphere2500). Dense kernels are Eigen's; the factorisation uses CHOLMOD's BLAS.
+// (600 columns on sphere2500). The gather of Sigma_RR is here; the dense part of each
+// supernode (Eigen) is selinv_kernel.inc, compiled twice (baseline and AVX2+FMA) and chosen at
+// load time (selinv_kernel.h). The factorisation uses CHOLMOD's BLAS.
 
 #include "nav/core/recovery/exact_marginals.h"
+
+#include "selinv_kernel.h"
 
 #include <cholmod.h>
 
@@ -33,47 +37,6 @@ using ConstMatMap = Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-
-/// In-place inverse of the lower triangle of T (the strict upper part is ignored and left
-/// undefined) by recursive blocking, ~n^3/3 flops in matrix products:
-///   [[A 0]; [B C]]^-1 = [[A^-1 0]; [-C^-1 B A^-1  C^-1]].
-void invert_lower_in_place(Eigen::Ref<Eigen::MatrixXd> T) {
-  const Eigen::Index n = T.rows();
-  if (n <= 32) {
-    Eigen::MatrixXd inverse = Eigen::MatrixXd::Identity(n, n);
-    T.triangularView<Eigen::Lower>().solveInPlace(inverse);
-    T.triangularView<Eigen::Lower>() = inverse;
-    return;
-  }
-  const Eigen::Index n1 = n / 2, n2 = n - n1;
-  invert_lower_in_place(T.topLeftCorner(n1, n1));
-  invert_lower_in_place(T.bottomRightCorner(n2, n2));
-  const Eigen::MatrixXd CB =
-      T.bottomRightCorner(n2, n2).triangularView<Eigen::Lower>() * T.bottomLeftCorner(n2, n1);
-  T.bottomLeftCorner(n2, n1).noalias() =
-      -(CB * T.topLeftCorner(n1, n1).triangularView<Eigen::Lower>());
-}
-
-/// Lower triangle of S = U^T U for the lower triangle of U (LAPACK's lauum), by recursive
-/// blocking, ~n^3/3 flops: with U = [[A 0]; [B C]],
-///   U^T U = [[A^T A + B^T B, .]; [C^T B, C^T C]].
-/// The strict upper part of S is not written.
-void lower_gram_in_place(const Eigen::Ref<const Eigen::MatrixXd>& U,
-                         Eigen::Ref<Eigen::MatrixXd> S) {
-  const Eigen::Index n = U.rows();
-  if (n <= 32) {
-    const Eigen::MatrixXd lower = U.triangularView<Eigen::Lower>();
-    S.triangularView<Eigen::Lower>() = lower.transpose() * lower;
-    return;
-  }
-  const Eigen::Index n1 = n / 2, n2 = n - n1;
-  const auto B = U.bottomLeftCorner(n2, n1);
-  lower_gram_in_place(U.topLeftCorner(n1, n1), S.topLeftCorner(n1, n1));
-  S.topLeftCorner(n1, n1).selfadjointView<Eigen::Lower>().rankUpdate(B.transpose());
-  S.bottomLeftCorner(n2, n1).noalias() =
-      U.bottomRightCorner(n2, n2).triangularView<Eigen::Lower>().transpose() * B;
-  lower_gram_in_place(U.bottomRightCorner(n2, n2), S.bottomRightCorner(n2, n2));
 }
 
 }  // namespace
@@ -115,7 +78,7 @@ struct ExactMarginals::Impl {
   }
 
   void factor(const Eigen::SparseMatrix<double>& Lambda, MarginalsOrdering ordering);
-  void invert();
+  void invert(MarginalsKernel kernel_choice);
 };
 
 namespace {
@@ -234,7 +197,7 @@ void ExactMarginals::Impl::factor(const Eigen::SparseMatrix<double>& Lambda,
   factor_ms = ms_since(t0);
 }
 
-void ExactMarginals::Impl::invert() {
+void ExactMarginals::Impl::invert(MarginalsKernel kernel_choice) {
   const auto t0 = std::chrono::steady_clock::now();
   const int nsuper = static_cast<int>(L->nsuper);
   const int* Ls = rows();
@@ -256,6 +219,9 @@ void ExactMarginals::Impl::invert() {
   const int max_below = static_cast<int>(L->maxesize);
   Eigen::MatrixXd srr_buffer(std::max(max_below, 1), std::max(max_below, 1));
   std::vector<int> map(static_cast<size_t>(std::max(max_below, 1)));
+  const SelinvSupernodeKernel kernel = kernel_choice == MarginalsKernel::kBaseline
+                                           ? &baseline::selinv_supernode
+                                           : selinv_supernode_kernel();
 
   for (int s = nsuper - 1; s >= 0; --s) {
     const int k1 = super()[s];
@@ -263,58 +229,43 @@ void ExactMarginals::Impl::invert() {
     const int nrows = pi()[s + 1] - pi()[s];
     const int nr = nrows - nc;
     const int* R = Ls + pi()[s] + nc;  // rows below the diagonal block, sorted
-    ConstMatMap Ls_block(Lx + px()[s], nrows, nc, Eigen::OuterStride<>(nrows));
-    MatMap S_block(sigma.get() + px()[s], nrows, nc, Eigen::OuterStride<>(nrows));
-
-    // U = L_JJ^-1 (lower triangular); Sigma_JJ = U^T U + (contribution of R, below).
-    Eigen::MatrixXd U = Ls_block.topRows(nc);
-    invert_lower_in_place(U);
-    auto S_JJ = S_block.topRows(nc);
-    lower_gram_in_place(U, S_JJ);
-
-    if (nr > 0) {
-      // Gather Sigma_RR (lower triangle suffices) from the later supernodes. The rows of R
-      // that are columns of one supernode t form a contiguous run; for that run the positions
-      // of R[q0..] in t's row list are found once by a merge and reused for every column.
-      auto S_RR = srr_buffer.topLeftCorner(nr, nr);
-      int q0 = 0;
-      while (q0 < nr) {
-        const int t = col_super[static_cast<size_t>(R[q0])];
-        const int t_first = super()[t];
-        const int t_end = super()[t + 1];
-        int q1 = q0;
-        while (q1 < nr && R[q1] < t_end) ++q1;
-        const int* t_rows = Ls + pi()[t];
-        const int t_nrows = pi()[t + 1] - pi()[t];
-        int pos = R[q0] - t_first;  // row R[q0] sits at its column offset in t's list
-        for (int p = q0; p < nr; ++p) {
-          // R[p] is in t's pattern (elimination-tree containment); guard against a bad factor.
-          while (pos < t_nrows && t_rows[pos] != R[p]) ++pos;
-          if (pos == t_nrows) {
-            throw ExactMarginalsError("ExactMarginals: supernode pattern containment violated");
-          }
-          map[static_cast<size_t>(p)] = pos;
+    // Gather Sigma_RR (lower triangle suffices) from the later supernodes. The rows of R
+    // that are columns of one supernode t form a contiguous run; for that run the positions
+    // of R[q0..] in t's row list are found once by a merge and reused for every column.
+    auto S_RR = srr_buffer.topLeftCorner(nr, nr);
+    int q0 = 0;
+    while (q0 < nr) {
+      const int t = col_super[static_cast<size_t>(R[q0])];
+      const int t_first = super()[t];
+      const int t_end = super()[t + 1];
+      int q1 = q0;
+      while (q1 < nr && R[q1] < t_end) ++q1;
+      const int* t_rows = Ls + pi()[t];
+      const int t_nrows = pi()[t + 1] - pi()[t];
+      int pos = R[q0] - t_first;  // row R[q0] sits at its column offset in t's list
+      for (int p = q0; p < nr; ++p) {
+        // R[p] is in t's pattern (elimination-tree containment); guard against a bad factor.
+        while (pos < t_nrows && t_rows[pos] != R[p]) ++pos;
+        if (pos == t_nrows) {
+          throw ExactMarginalsError("ExactMarginals: supernode pattern containment violated");
         }
-        const double* t_sigma = sigma.get() + px()[t];
-        for (int q = q0; q < q1; ++q) {
-          const double* col = t_sigma + static_cast<std::ptrdiff_t>(R[q] - t_first) * t_nrows;
-          for (int p = q0; p < nr; ++p) S_RR(p, q) = col[map[static_cast<size_t>(p)]];
-        }
-        q0 = q1;
+        map[static_cast<size_t>(p)] = pos;
       }
-      const auto L_RJ = Ls_block.bottomRows(nr);
-      // Y = Sigma_RR L_RJ U = -Sigma_RJ; Z = L_RJ U;
-      // Sigma_JJ = U^T U + U^T L_RJ^T Sigma_RR L_RJ U = U^T U + Y^T Z (symmetric: lower only).
-      Eigen::MatrixXd Y = S_RR.selfadjointView<Eigen::Lower>() * L_RJ;
-      Y = Y * U.triangularView<Eigen::Lower>();
-      const Eigen::MatrixXd Z = L_RJ * U.triangularView<Eigen::Lower>();
-      S_JJ.triangularView<Eigen::Lower>() += Y.transpose() * Z;
-      S_block.bottomRows(nr) = -Y;
+      const double* t_sigma = sigma.get() + px()[t];
+      for (int q = q0; q < q1; ++q) {
+        const double* col = t_sigma + static_cast<std::ptrdiff_t>(R[q] - t_first) * t_nrows;
+        for (int p = q0; p < nr; ++p) S_RR(p, q) = col[map[static_cast<size_t>(p)]];
+      }
+      q0 = q1;
     }
-    S_JJ.triangularView<Eigen::StrictlyUpper>() = S_JJ.transpose();
+    // Dense part (selinv_kernel.inc), in the instruction set chosen at load time.
+    kernel(Lx + px()[s], nrows, nc, sigma.get() + px()[s], srr_buffer.data(),
+           static_cast<int>(srr_buffer.rows()));
   }
   inversion_ms = ms_since(t0);
 }
+
+const char* auto_marginals_kernel_name() { return selinv_kernel_name(); }
 
 ExactMarginals::ExactMarginals(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 ExactMarginals::ExactMarginals(ExactMarginals&&) noexcept = default;
@@ -322,7 +273,7 @@ ExactMarginals& ExactMarginals::operator=(ExactMarginals&&) noexcept = default;
 ExactMarginals::~ExactMarginals() = default;
 
 ExactMarginals ExactMarginals::compute(const Eigen::SparseMatrix<double>& Lambda, int block_dim,
-                                       MarginalsOrdering ordering) {
+                                       MarginalsOrdering ordering, MarginalsKernel kernel) {
   if (block_dim < 1) {
     throw std::invalid_argument("ExactMarginals: block_dim " + std::to_string(block_dim) +
                                 " must be >= 1");
@@ -343,7 +294,7 @@ ExactMarginals ExactMarginals::compute(const Eigen::SparseMatrix<double>& Lambda
     compressed.makeCompressed();
     impl->factor(compressed, ordering);
   }
-  impl->invert();
+  impl->invert(kernel);
   return ExactMarginals(std::move(impl));
 }
 

@@ -50,13 +50,24 @@ enum class MarginalsOrdering {
   kCholmodAuto,  ///< CHOLMOD's default choice (scalar AMD, METIS if AMD fills badly)
 };
 
+/// Instruction set of the selected inversion's dense kernels (Eigen GEMM/triangular products
+/// per supernode). Both give the same marginals up to rounding.
+enum class MarginalsKernel {
+  kAuto,      ///< AVX2+FMA copy when the CPU has both (checked once at load time), else baseline
+  kBaseline,  ///< the project's default instruction set (SSE2 on x86-64); benchmark baseline
+};
+
+/// "avx2-fma" or "baseline": what kAuto runs on this CPU.
+const char* auto_marginals_kernel_name();
+
 class ExactMarginals {
  public:
   /// Factors Lambda (both triangles stored, or at least the lower one: only the lower
   /// triangle is read) and runs the selected inversion. Throws ExactMarginalsError if Lambda is
   /// not SPD or its size is not a multiple of block_dim, std::invalid_argument if block_dim < 1.
   static ExactMarginals compute(const Eigen::SparseMatrix<double>& Lambda, int block_dim,
-                                MarginalsOrdering ordering = MarginalsOrdering::kBlockAmd);
+                                MarginalsOrdering ordering = MarginalsOrdering::kBlockAmd,
+                                MarginalsKernel kernel = MarginalsKernel::kAuto);
 
   ExactMarginals(ExactMarginals&&) noexcept;
   ExactMarginals& operator=(ExactMarginals&&) noexcept;
