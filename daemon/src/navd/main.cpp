@@ -3,6 +3,8 @@
 //        [--lcm-url URL] [--duration-s S]
 //   navd --config C --replay DIVE.lcmlog [--speed X | --as-fast-as-possible] [--out DIR]
 //        (replay_mode.h: NavFilter on the dive's measurements, published on LCM)
+//   navd --config VEHICLE.yaml [--checkpoints] [--duration-s S]: when a sensor has a hardware
+//        transport, the device threads feed the NavFilter (live_mode.h)
 // Threads: sim source -> MeasurementQueue -> filter (owns the Esdf) -> recovery (PCG), and a
 // LCM publisher. SIGTERM/SIGINT stop everything within a second (STOPPING=1), exit 0. At the
 // end (survey done, signal or --duration-s) one line of JSON goes to stdout (summary.h).
@@ -25,6 +27,7 @@
 #include "nav/daemon/sd_notify.h"
 #include "navd/device_sources.h"
 #include "navd/filter_loop.h"
+#include "navd/live_mode.h"
 #include "navd/mailboxes.h"
 #include "navd/publisher.h"
 #include "navd/recovery_worker.h"
@@ -48,7 +51,7 @@ struct Args {
   double duration_s = 0.0;  ///< 0: until the survey ends
   std::string replay;       ///< a dive log to replay instead of the built-in survey
   std::string out_dir;      ///< replay output directory (with --replay)
-  bool checkpoints = false;  ///< with --replay: resume from / write checkpoints
+  bool checkpoints = false;  ///< --replay or live: resume from / write checkpoints
 };
 
 void add_options(CLI::App& app, Args& args) {
@@ -65,8 +68,8 @@ void add_options(CLI::App& app, Args& args) {
       ->check(CLI::ExistingFile);
   app.add_option("--out", args.out_dir, "with --replay: write the replay output directory");
   app.add_flag("--checkpoints", args.checkpoints,
-               "with --replay: resume from the newest valid checkpoint of this log in "
-               "checkpoint.path and write checkpoints there (checkpoint.period_s, at the end)");
+               "with --replay or on devices: resume from the newest valid checkpoint of this "
+               "input in checkpoint.path and write checkpoints there (period_s, at the end)");
   app.add_option("--duration-s", args.duration_s, "stop after this many seconds (0: no limit)")
       ->check(CLI::NonNegativeNumber);
 }
@@ -101,6 +104,10 @@ int run(const Args& args) {
                                       args.as_fast_as_possible, args.out_dir,
                                       args.checkpoints};
     return navd::run_replay_mode(config, replay, block_stop_signals(), daemon::SdNotifier());
+  }
+  if (navd::has_device_sensors(config)) {
+    const navd::LiveModeArgs live{args.config_path, args.duration_s, args.checkpoints};
+    return navd::run_live_mode(config, live, block_stop_signals(), daemon::SdNotifier());
   }
   core::sim::SurveyOptions survey_options;
   survey_options.num_images = args.images;

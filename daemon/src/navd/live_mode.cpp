@@ -1,0 +1,174 @@
+#include "navd/live_mode.h"
+
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <thread>
+#include <vector>
+
+#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/filter/nav_filter_checkpointer.h"
+#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/resume_point.h"
+#include "nav/daemon/sources/device_sources.h"
+#include "nav/daemon/time_ordering.h"
+#include "navd/device_sources.h"
+#include "navd/link_publisher.h"
+#include "navd/mailboxes.h"
+#include "navd/publisher.h"
+
+namespace nav::navd {
+namespace {
+
+constexpr std::size_t kQueueCapacity = 4096;
+constexpr const char* kLiveIdentity = "live";
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// The SLAM filter of the live mode, resumed from a checkpoint when asked.
+struct LiveFilter {
+  std::unique_ptr<daemon::NavFilter> slam;
+  std::optional<daemon::ResumeSkipper> skipper;
+  std::unique_ptr<daemon::NavFilterCheckpointer> checkpointer;
+};
+
+LiveFilter make_live_filter(const daemon::NavdConfig& config, bool checkpoints) {
+  const daemon::NavFilterOptions options = daemon::NavFilterOptions::from_config(config);
+  auto make = [&] { return std::make_unique<daemon::NavFilter>(config, nullptr, options); };
+  LiveFilter live;
+  live.slam = make();
+  if (!checkpoints) return live;
+  daemon::ResumedNavFilter resumed =
+      daemon::resume_nav_filter(config.checkpoint.path, make, kLiveIdentity);
+  for (const daemon::SkippedCheckpoint& k : resumed.skipped) {
+    spdlog::warn("navd: checkpoint {} skipped: {}", k.path.string(), k.reason);
+  }
+  if (resumed.filter) {
+    live.slam = std::move(resumed.filter);
+    live.skipper.emplace(resumed.point);
+    spdlog::info("navd: resumed from {} ({} measurements applied)", resumed.path.string(),
+                 resumed.point.applied);
+  }
+  live.checkpointer = std::make_unique<daemon::NavFilterCheckpointer>(
+      config.checkpoint, resumed.point, kLiveIdentity);
+  return live;
+}
+
+/// Feeds one time-ordered measurement to the filter; the error (what, when) or "".
+std::string filter_one(LiveFilter& live, const daemon::Measurement& m, LinkPublisher& links) {
+  if (live.skipper && live.skipper->skip(m)) return {};
+  if (core::Status s = live.slam->process(m); !s.ok()) {
+    return "SLAM filter at t = " + std::to_string(daemon::validity_us(m)) +
+           " us: " + s.to_string();
+  }
+  if (live.checkpointer) live.checkpointer->after_measurement(*live.slam, m);
+  links.on_measurement(*live.slam);
+  return {};
+}
+
+/// The filter thread: queue -> time ordering -> filter until `stop`; the error or "".
+std::string filter_loop(const daemon::NavdConfig& config, daemon::MeasurementQueue& queue,
+                        LiveFilter& live, LinkPublisher& links, const std::atomic<bool>& stop) {
+  daemon::TimeOrderingOptions ordering_options;
+  ordering_options.latency_window_us =
+      static_cast<std::int64_t>(config.filter.latency_window_ms * 1e3);
+  daemon::TimeOrderingBuffer ordering(ordering_options);
+  std::vector<daemon::Measurement> batch;
+  batch.reserve(256);
+  while (!stop.load()) {
+    batch.clear();
+    queue.pop_bulk(batch, 256);
+    for (const daemon::Measurement& m : batch) ordering.insert(m);
+    while (std::optional<daemon::Measurement> m = ordering.pop_ready()) {
+      if (std::string error = filter_one(live, *m, links); !error.empty()) return error;
+    }
+    if (batch.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  if (live.checkpointer) live.checkpointer->shutdown(*live.slam);
+  return {};
+}
+
+/// Waits for a stop signal (returned), the filter's end or the duration (0), feeding the
+/// watchdog meanwhile.
+int wait_for_end(const sigset_t& signals, const std::atomic<bool>& filter_done,
+                 const daemon::SdNotifier& notifier, double duration_s, Clock::time_point start) {
+  const timespec tick{0, 20'000'000};
+  const auto period = notifier.watchdog_period();
+  auto last_watchdog = Clock::now();
+  while (!filter_done.load()) {
+    const int sig = sigtimedwait(&signals, nullptr, &tick);
+    if (sig > 0) return sig;
+    if (period && Clock::now() - last_watchdog >= *period) {
+      notifier.watchdog();
+      last_watchdog = Clock::now();
+    }
+    if (duration_s > 0.0 && seconds_since(start) >= duration_s) return 0;
+  }
+  return 0;
+}
+
+}  // namespace
+
+bool has_device_sensors(const daemon::NavdConfig& config) {
+  for (const daemon::SensorConfig& sensor : config.sensors) {
+    if (daemon::has_device(sensor)) return true;
+  }
+  return false;
+}
+
+int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
+                  const sigset_t& stop_signals, const daemon::SdNotifier& notifier) {
+  LiveFilter live = make_live_filter(config, args.checkpoints);
+  daemon::MeasurementQueue queue(kQueueCapacity);
+  SolutionBoard board;
+  Publisher publisher(config.lcm, board, queue);
+  if (!publisher.good()) spdlog::error("navd: cannot open LCM at '{}'", config.lcm.url);
+  LinkPublisher links(config.lcm, board);
+  NavdDevices devices(config, queue);
+  devices.attach(publisher);
+
+  std::atomic<bool> stop{false}, filter_done{false};
+  std::string failure;
+  const auto start = Clock::now();
+  std::thread filter_thread([&] {
+    try {
+      failure = filter_loop(config, queue, live, links, stop);
+    } catch (const std::exception& e) {
+      failure = e.what();
+    }
+    filter_done.store(true);
+  });
+  std::thread publisher_thread([&] { publisher.run(stop); });
+  const std::size_t device_threads = devices.start(stop);
+  spdlog::info("navd: live on {} device threads ({})", device_threads, args.config_path);
+  notifier.ready_with_status("live: " + std::to_string(device_threads) + " devices");
+  const int sig = wait_for_end(stop_signals, filter_done, notifier, args.duration_s, start);
+  if (sig > 0) spdlog::info("navd: signal {}, stopping", sig);
+  notifier.stopping();
+  stop.store(true);
+  devices.join();
+  filter_thread.join();
+  publisher_thread.join();
+  const daemon::NavFilterCounters& counters = live.slam->counters();
+  std::printf(
+      "{\"mode\":\"live\",\"measurements\":%llu,\"images\":%zu,\"links\":%zu,"
+      "\"devices\":%zu,\"queue_dropped\":%llu,\"wall_s\":%.3f}\n",
+      static_cast<unsigned long long>(counters.measurements), live.slam->images().size(),
+      live.slam->links().size(), device_threads,
+      static_cast<unsigned long long>(queue.total_dropped()), seconds_since(start));
+  std::fflush(stdout);
+  if (!failure.empty()) {
+    spdlog::error("navd: live filter: {}", failure);
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace nav::navd

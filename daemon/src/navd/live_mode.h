@@ -1,0 +1,35 @@
+#pragma once
+// navd on the vehicle: the device threads of the sensors with a hardware transport
+// (navd/device_sources.h) feed the same MeasurementQueue -> TimeOrderingBuffer
+// (filter.latency_window_ms) -> NavFilter -> Publisher / LinkPublisher path as navd --replay,
+// paced by the devices themselves. No registration table (the vision stage is not wired yet):
+// links are proposed and published, none is accepted. Recovery runs inside NavFilter per image
+// (filter.cg_iterations_per_step), as in --replay. With `checkpoints`, the SLAM filter resumes
+// from the newest valid checkpoint of input "live" in checkpoint.path and writes checkpoints
+// there (checkpoint.period_s, at shutdown), as --replay --checkpoints does for a log.
+// sd_notify READY/WATCHDOG (from the main thread, so a quiet sensor set keeps the watchdog fed)
+// and STOPPING; SIGTERM/SIGINT or `duration_s` stop it. One line of JSON goes to stdout at the
+// end: {"mode":"live","measurements":...,"images":...,"links":...,"devices":...,"wall_s":...}.
+// Exit status: 0 stopped, 1 the filter failed.
+
+#include <csignal>
+#include <string>
+
+#include "nav/daemon/config.h"
+#include "nav/daemon/sd_notify.h"
+
+namespace nav::navd {
+
+struct LiveModeArgs {
+  std::string config_path;
+  double duration_s = 0.0;   ///< 0: until a stop signal
+  bool checkpoints = false;  ///< resume from / write checkpoint.path (identity "live")
+};
+
+/// True when at least one configured sensor has a hardware transport (not `sim`).
+bool has_device_sensors(const daemon::NavdConfig& config);
+
+int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
+                  const sigset_t& stop_signals, const daemon::SdNotifier& notifier);
+
+}  // namespace nav::navd
