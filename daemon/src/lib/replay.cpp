@@ -10,6 +10,7 @@
 
 #include "nav/daemon/filter/nav_filter_checkpointer.h"
 #include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/replay/filter_worker.h"
 #include "nav/daemon/resume_point.h"
 
 namespace nav::daemon {
@@ -26,9 +27,11 @@ struct Checkpointing {
 };
 
 /// Feeds one time-ordered measurement to both filters (the SLAM filter only if its checkpoint
-/// does not hold it yet); false (and run.error) on a failure.
+/// does not hold it yet; the dead-reckoning twin through its worker thread); false on a failure
+/// (run.error set for the SLAM filter; the twin's message comes from FilterWorker::finish()).
 bool filter_one(ReplayRun& run, const Measurement& m,
-                const std::function<void(const NavFilter&)>& after, Checkpointing& ckpt) {
+                const std::function<void(const NavFilter&)>& after, Checkpointing& ckpt,
+                FilterWorker* twin) {
   const bool held = ckpt.skipper && ckpt.skipper->skip(m);
   if (!held) {
     if (core::Status s = run.slam->process(m); !s.ok()) {
@@ -38,12 +41,9 @@ bool filter_one(ReplayRun& run, const Measurement& m,
     if (ckpt.checkpointer) ckpt.checkpointer->after_measurement(*run.slam, m);
     if (after) after(*run.slam);
   }
-  if (run.dead_reckoning) {
-    if (core::Status s = run.dead_reckoning->process(m); !s.ok()) {
-      run.error = "dead-reckoning filter at t = " + std::to_string(validity_us(m)) +
-                  " us: " + s.to_string();
-      return false;
-    }
+  if (twin) {
+    twin->push(m);
+    if (twin->failed()) return false;
   }
   return true;
 }
@@ -96,6 +96,11 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
   std::atomic<bool> stop{false}, done{false};
   std::string source_error;
   const auto start = std::chrono::steady_clock::now();
+  // The twin runs on its own thread (the second core), fed the same ordered measurements.
+  std::unique_ptr<FilterWorker> twin;
+  if (run.dead_reckoning) {
+    twin = std::make_unique<FilterWorker>(*run.dead_reckoning, "dead-reckoning filter");
+  }
   std::thread source([&] {
     try {
       run.source = run_dive_log_source(log_path, config, source_options, queue, stop, done);
@@ -116,7 +121,7 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
     while (ok) {
       std::optional<Measurement> m = ordering.pop_ready();
       if (!m) break;
-      ok = filter_one(run, *m, options.after_measurement, ckpt);
+      ok = filter_one(run, *m, options.after_measurement, ckpt, twin.get());
     }
     if (source_done && batch.empty() && queue.size() == 0) break;
     if (batch.empty()) std::this_thread::sleep_for(std::chrono::microseconds(200));
@@ -124,7 +129,7 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
   while (ok && !stopped()) {
     std::optional<Measurement> m = ordering.pop_any();
     if (!m) break;
-    ok = filter_one(run, *m, options.after_measurement, ckpt);
+    ok = filter_one(run, *m, options.after_measurement, ckpt, twin.get());
   }
   stop.store(true);
   source.join();
@@ -133,7 +138,10 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
   if (ok && ckpt.checkpointer) ckpt.checkpointer->shutdown(*run.slam);
   if (ok) {
     if (core::Status s = run.slam->finish(); !s.ok()) run.error = "SLAM finish: " + s.to_string();
-    if (run.dead_reckoning) (void)run.dead_reckoning->finish();
+  }
+  if (twin) {
+    const std::string twin_error = twin->finish(ok);
+    if (run.error.empty() && !twin_error.empty()) run.error = twin_error;
   }
   run.wall_s = seconds_since(start);
   run.ordering = ordering.stats();
