@@ -66,6 +66,49 @@ TEST(CovarianceBounds, CertifiedInflationFollowsTheResidual) {
   EXPECT_NEAR(bounds.robot_bound()(0, 0), 1.0 + eps, 1e-14);
 }
 
+/// rr + ii − ir − irᵀ of the first two elements, read from propose()'s joint.
+Eigen::Matrix2d offset_from_joint(const LinkProposal& p, int d) {
+  const Eigen::Matrix2d rr = p.joint.block<2, 2>(0, 0);
+  const Eigen::Matrix2d ii = p.joint.block<2, 2>(d, d);
+  const Eigen::Matrix2d ir = p.joint.block<2, 2>(d, 0);
+  return rr + ii - ir - ir.transpose();
+}
+
+TEST(CovarianceBounds, OffsetCovarianceEqualsTheOneOfTheProposalJoint) {
+  // Random SPD robot bound, certified inflation, one state tightened within the snapshot (its
+  // snapshot bound is used): the 2x2 shortcut must give exactly the joint's numbers.
+  std::mt19937 rng(11);
+  std::normal_distribution<double> n01;
+  const int d = 6;
+  Eigen::MatrixXd A(d, d);
+  for (int i = 0; i < A.size(); ++i) A(i) = n01(rng);
+  const Eigen::MatrixXd P0 = A * A.transpose() + Eigen::MatrixXd::Identity(d, d);
+  CovarianceBounds bounds(d);
+  ASSERT_TRUE(bounds.initialize_robot(P0).ok());
+  ASSERT_TRUE(bounds.insert(1).ok());
+  ASSERT_TRUE(bounds.insert(2).ok());
+  ASSERT_TRUE(bounds.set_recovery(0.5 * P0, 0.03, 3).ok());
+  Eigen::MatrixXd sigma_ir(d, d);
+  for (int i = 0; i < sigma_ir.size(); ++i) sigma_ir(i) = 0.1 * n01(rng);
+  LinkProposal first;
+  ASSERT_TRUE(bounds.propose(1, sigma_ir, &first).ok());
+  Eigen::MatrixXd H_r = Eigen::MatrixXd::Zero(2, d), H_i = Eigen::MatrixXd::Zero(2, d);
+  H_r.leftCols(2) = -Eigen::Matrix2d::Identity();
+  H_i.leftCols(2) = Eigen::Matrix2d::Identity();
+  ASSERT_TRUE(bounds.update(first, H_r, H_i, 0.01 * Eigen::MatrixXd::Identity(2, 2)).ok());
+  for (int state : {1, 2}) {
+    LinkProposal p;
+    ASSERT_TRUE(bounds.propose(state, sigma_ir, &p).ok());
+    Eigen::Matrix2d shortcut;
+    const Eigen::Matrix2d sigma_ir_xy = sigma_ir.topLeftCorner<2, 2>();
+    ASSERT_TRUE(bounds.offset_covariance_2d(state, sigma_ir_xy, &shortcut).ok());
+    EXPECT_EQ(shortcut, offset_from_joint(p, d)) << "state " << state;
+  }
+  Eigen::Matrix2d unused;
+  EXPECT_EQ(bounds.offset_covariance_2d(7, Eigen::Matrix2d::Zero(), &unused).code(),
+            StatusCode::kUnknownState);
+}
+
 TEST(CovarianceBounds, RejectsMissingStatesAndBadInput) {
   CovarianceBounds bounds(6);
   EXPECT_EQ(bounds.insert(1).code(), StatusCode::kInvalidArgument);  // no robot yet

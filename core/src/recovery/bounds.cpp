@@ -189,6 +189,27 @@ Status CovarianceBounds::propose(int state, const Eigen::MatrixXd& sigma_ir,
   return Status::Ok();
 }
 
+Status CovarianceBounds::offset_covariance_2d(int state, const Eigen::Matrix2d& sigma_ir_top_left,
+                                              Eigen::Matrix2d* covariance) const {
+  if (!contains(state) || block_dim_ < 2) {
+    return Status::Error(StatusCode::kUnknownState,
+                         "CovarianceBounds::offset_covariance_2d: state " +
+                             std::to_string(state) + " has no bound (never inserted)");
+  }
+  const Entry& e = entries_[static_cast<size_t>(state)];
+  const bool tightened_now = e.snapshot_epoch == epoch_;  // as in propose()
+  const Eigen::MatrixXd& snapshot_bound = tightened_now ? e.snapshot_bound : e.bound;
+  const double snapshot_lambda = tightened_now ? e.snapshot_lambda_max : e.lambda_max;
+  const double epsilon_state = epsilon(snapshot_lambda);
+  const Eigen::Matrix2d I = Eigen::Matrix2d::Identity();
+  const Eigen::Matrix2d rr =
+      sigma_rr_hat_.topLeftCorner<2, 2>() + (epsilon_robot_ + epsilon_state) * I;
+  const Eigen::Matrix2d ii = snapshot_bound.topLeftCorner<2, 2>() + epsilon_state * I;
+  const Eigen::Matrix2d& ir = sigma_ir_top_left;
+  *covariance = rr + ii - ir - ir.transpose();
+  return Status::Ok();
+}
+
 Status CovarianceBounds::update_robot(const Eigen::MatrixXd& H, const Eigen::MatrixXd& R) {
   if (H.cols() != block_dim_ || R.rows() != H.rows() || R.cols() != H.rows()) {
     return Status::Error(StatusCode::kInvalidArgument,

@@ -14,14 +14,6 @@ namespace {
 
 constexpr int kD = 12;  // block dimension
 
-/// Covariance of Δ = p_i − p_r (world x, y) from the joint [Σ_rr Σ_ri; Σ_ir Σ~_ii] (24 x 24).
-Eigen::Matrix2d horizontal_offset_covariance(const Eigen::MatrixXd& joint) {
-  const Eigen::Matrix2d rr = joint.block<2, 2>(0, 0);
-  const Eigen::Matrix2d ii = joint.block<2, 2>(kD, kD);
-  const Eigen::Matrix2d ir = joint.block<2, 2>(kD, 0);
-  return rr + ii - ir - ir.transpose();
-}
-
 /// The joint without the truncation inflation: [Σ^_rr Σ^_ri; Σ^_ir Σ~_ii] (nav_filter.h "Gate").
 Eigen::MatrixXd gate_joint(const core::LinkProposal& p) {
   Eigen::MatrixXd joint = p.joint;
@@ -38,17 +30,24 @@ double NavFilter::footprint_radius_m(double altitude_m) const {
 
 bool NavFilter::is_candidate(const ImageRecord& earlier, const ImageRecord& current, int block,
                              core::LinkProposal* joint) const {
-  if (!bounds_.propose(block, recovery_.cross_covariance(block), joint).ok()) return false;
+  // The test needs only the 2x2 horizontal parts of the joint: computed first (the same
+  // numbers as from the full joint), the 24x24 joint is built for the proposed pairs only.
+  const Eigen::Matrix2d sigma_ir_xy =
+      recovery_.solution().block<2, 2>(Eigen::Index{block} * kD, 1);
+  Eigen::Matrix2d C;
+  if (!bounds_.offset_covariance_2d(block, sigma_ir_xy, &C).ok()) return false;
   const Eigen::Vector2d delta = filter_.mean_block(block).head<2>() -
                                 filter_.mean_block(core::Esdf::kRobotBlock).head<2>();
-  const Eigen::Matrix2d C = horizontal_offset_covariance(joint->joint);
   const double lambda_max = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
                                 C, Eigen::EigenvaluesOnly)
                                 .eigenvalues()(1);
   const core::Vec6& camera = sensors_.camera()->x_body_camera;
   const double reach_m = footprint_radius_m(earlier.altitude_m) +
                          footprint_radius_m(current.altitude_m) + 2.0 * camera.head<2>().norm();
-  return delta.norm() - std::sqrt(proposal_chi2_ * std::max(lambda_max, 0.0)) < reach_m;
+  if (!(delta.norm() - std::sqrt(proposal_chi2_ * std::max(lambda_max, 0.0)) < reach_m)) {
+    return false;
+  }
+  return bounds_.propose(block, recovery_.cross_covariance(block), joint).ok();
 }
 
 void NavFilter::propose_and_link(ImageRecord& current) {

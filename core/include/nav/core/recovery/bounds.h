@@ -125,6 +125,14 @@ class CovarianceBounds {
   /// covariance Σ^_ir (rows of block i of the robot column). kUnknownState if i has no bound.
   Status propose(int state, const Eigen::MatrixXd& sigma_ir, LinkProposal* proposal) const;
 
+  /// Covariance of the offset of the first two elements, x_i[0:2] − x_r[0:2], under the joint
+  /// propose() would build from a Σ^_ir whose top-left 2x2 is `sigma_ir_top_left` (rr + ii − ir
+  /// − irᵀ, same inflations, same floating-point operations: equal to computing it from
+  /// propose()'s joint), without building the 2d x 2d joint: a cheap test per link candidate.
+  /// kUnknownState if i has no bound.
+  Status offset_covariance_2d(int state, const Eigen::Matrix2d& sigma_ir_top_left,
+                              Eigen::Matrix2d* covariance) const;
+
   /// A successful registration z = h(x_r, x_i) + v, v ~ N(0, R), linearised with
   /// H = [H_r | H_i] (m x d each): Joseph-form Kalman update of the proposal's joint,
   ///   K = P Hᵀ (H P Hᵀ + R)⁻¹,  P+ = (I - K H) P (I - K H)ᵀ + K R Kᵀ,
