@@ -84,6 +84,26 @@ TEST(Config, SimYamlLoads) {
   EXPECT_DOUBLE_EQ(c.sensors[2].latency_s, 0.05);
   EXPECT_DOUBLE_EQ(c.sensors[3].latency_s, 0.05);
   EXPECT_DOUBLE_EQ(c.sensors[2].pressure.latitude_deg, 41.73);
+  ASSERT_TRUE(c.sim.has_value());  // the default mode's dive
+  EXPECT_EQ(c.sim->dive_dir, "build/sim-dive");
+  EXPECT_EQ(c.sim->seed, 1);
+  EXPECT_EQ(c.sim->images, 866);
+}
+
+TEST(Config, SimSection) {
+  EXPECT_FALSE(parse_config(kMinimal).sim.has_value());
+  const NavdConfig c = parse_config(std::string(kMinimal) + "sim: {dive_dir: d, images: 12}\n");
+  ASSERT_TRUE(c.sim.has_value());
+  EXPECT_EQ(c.sim->dive_dir, "d");
+  EXPECT_EQ(c.sim->images, 12);
+  EXPECT_EQ(c.sim->seed, 1);
+  EXPECT_DOUBLE_EQ(c.sim->outlier_rate, 0.05);
+  EXPECT_EQ(expect_error(std::string(kMinimal) + "sim: {images: 12}\n").key_path(),
+            "sim.dive_dir");
+  EXPECT_EQ(expect_error(std::string(kMinimal) + "sim: {dive_dir: d, images: 1}\n").key_path(),
+            "sim.images");
+  EXPECT_EQ(expect_error(std::string(kMinimal) + "sim: {dive_dir: d, seeds: 1}\n").key_path(),
+            "sim.seeds");
 }
 
 TEST(Config, RovYamlLoads) {

@@ -1,5 +1,5 @@
-// navd with a device sensor: an altimeter on a pseudo-terminal beside the built-in simulated
-// survey's sim sensors gets a device thread; its bytes go out on RAW_ALTIMETER_DEV and its
+// navd with a device sensor (live mode): an altimeter on a pseudo-terminal beside sim sensors
+// (which get none) gets a device thread; its bytes go out on RAW_ALTIMETER_DEV and its
 // health in health_t.sensors (LCM udpm with ttl=0; skipped where multicast does not loop back).
 #include <gtest/gtest.h>
 #include <pty.h>
@@ -91,7 +91,7 @@ TEST(NavdDevices, SerialSensorThreadPublishesRawBytesAndHealth) {
   std::atomic<int> code{-1};
   std::thread navd([&] {
     const std::string cmd = std::string("'") + NAVD_PATH + "' --config '" + config.string() +
-                            "' --images 20 --speed 10 --duration-s 2.5 --lcm-url '" + kUdpmUrl +
+                            "' --duration-s 2.5 --lcm-url '" + kUdpmUrl +
                             "' >/dev/null 2>&1";
     const int status = std::system(cmd.c_str());
     code.store(WIFEXITED(status) ? WEXITSTATUS(status) : -1);

@@ -84,6 +84,16 @@ CheckpointConfig parse_checkpoint(const YamlReader& c) {
   return checkpoint;
 }
 
+SimDiveConfig parse_sim(const YamlReader& c) {
+  c.expect_map({"dive_dir", "seed", "images", "outlier_rate"});
+  SimDiveConfig sim;
+  c.read("dive_dir", sim.dive_dir, true);
+  c.read("seed", sim.seed, 0, 2147483647);
+  c.read("images", sim.images, 2, 100000);
+  c.read("outlier_rate", sim.outlier_rate, 0.0, 1.0);
+  return sim;
+}
+
 }  // namespace
 
 ConfigError::ConfigError(const std::string& source, std::string key_path, std::string reason)
@@ -130,12 +140,13 @@ NavdConfig parse_config(const std::string& yaml_text, const std::string& source,
                           std::to_string(e.mark.column + 1) + ": " + e.msg);
   }
   const YamlReader doc(root, "", &source);
-  doc.expect_map({"sensors", "filter", "lcm", "checkpoint"});
+  doc.expect_map({"sensors", "filter", "lcm", "checkpoint", "sim"});
   NavdConfig config;
   config.sensors = detail::parse_sensors(doc.at("sensors"), base_dir);
   if (doc.has("filter")) config.filter = parse_filter(doc.at("filter"));
   if (doc.has("lcm")) config.lcm = parse_lcm(doc.at("lcm"));
   if (doc.has("checkpoint")) config.checkpoint = parse_checkpoint(doc.at("checkpoint"));
+  if (doc.has("sim")) config.sim = parse_sim(doc.at("sim"));
   return config;
 }
 

@@ -6,7 +6,7 @@
 #include <navlcm/camera_link_t.hpp>
 #include <navlcm/delayed_state_bound_t.hpp>
 
-#include "navd/sim_source.h"
+#include "navd/clock.h"
 
 namespace nav::navd {
 

@@ -13,7 +13,7 @@
 
 #include "nav/daemon/config.h"
 #include "nav/daemon/filter/nav_filter.h"
-#include "navd/mailboxes.h"
+#include "navd/solution_board.h"
 
 namespace lcm {
 class LCM;

@@ -18,7 +18,7 @@
 #include "nav/daemon/time_ordering.h"
 #include "navd/device_sources.h"
 #include "navd/link_publisher.h"
-#include "navd/mailboxes.h"
+#include "navd/solution_board.h"
 #include "navd/publisher.h"
 
 namespace nav::navd {

@@ -8,7 +8,7 @@
 #include <navlcm/nav_solution_t.hpp>
 #include <thread>
 
-#include "navd/sim_source.h"
+#include "navd/clock.h"
 
 namespace nav::navd {
 namespace {

@@ -11,7 +11,7 @@
 #include "nav/daemon/config.h"
 #include "nav/daemon/measurement_queue.h"
 #include "nav/daemon/sources/sensor_health.h"
-#include "navd/mailboxes.h"
+#include "navd/solution_board.h"
 
 namespace lcm {
 class LCM;

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <thread>
@@ -10,9 +11,10 @@
 #include "nav/daemon/measurement_queue.h"
 #include "nav/daemon/replay/replay.h"
 #include "navd/link_publisher.h"
-#include "navd/mailboxes.h"
+#include "navd/solution_board.h"
 #include "navd/publisher.h"
-#include "navd/sim_source.h"
+#include "navd/clock.h"
+#include "report/report.h"
 
 namespace nav::navd {
 namespace {
@@ -27,6 +29,24 @@ int wait_for(const sigset_t& signals, const std::atomic<bool>& done) {
     if (sig > 0) return sig;
   }
   return 0;
+}
+
+/// The report of the replay output directory `out_dir` of the dive `dive_dir`; false (logged)
+/// on failure.
+bool write_report(const std::string& out_dir, const std::string& dive_dir) {
+  report::ReportOptions options;
+  options.out_dir = out_dir;
+  options.dive_dir = dive_dir;
+  try {
+    const auto start = std::chrono::steady_clock::now();
+    (void)report::run_report(options);
+    spdlog::info("navd: report written to {} ({:.1f} s)", out_dir,
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    return true;
+  } catch (const std::exception& e) {
+    spdlog::error("navd: report of {}: {}", out_dir, e.what());
+    return false;
+  }
 }
 
 }  // namespace
@@ -85,7 +105,8 @@ int run_replay_mode(const daemon::NavdConfig& config, const ReplayModeArgs& args
   if (!args.out_dir.empty()) daemon::write_replay_outputs(run, analysis, summary, args.out_dir);
   std::printf("%s\n", summary.c_str());
   std::fflush(stdout);
-  return run.error.empty() ? 0 : 1;
+  if (!run.error.empty()) return 1;
+  return args.report && !args.out_dir.empty() && !write_report(args.out_dir, dive_dir) ? 1 : 0;
 }
 
 }  // namespace nav::navd

@@ -4,7 +4,7 @@
 // (Publisher: nav_solution_t, health_t; LinkPublisher: camera_link_t, delayed_state_bound_t,
 // bounds_snapshot_t), with sd_notify READY/WATCHDOG/STOPPING, SIGTERM/SIGINT stop. At the end
 // the replay's JSON summary goes to stdout and, with --out, the replay output directory is
-// written. Exit status: 0 done or stopped, 1 the filter failed.
+// written, and with `report` the report (metrics.json, the paper's figures) after it. Exit status: 0 done or stopped, 1 the filter failed.
 
 #include <csignal>
 #include <string>
@@ -21,6 +21,7 @@ struct ReplayModeArgs {
   bool as_fast_as_possible = false;
   std::string out_dir;
   bool checkpoints = false;  ///< --checkpoints: resume from / write checkpoint.path
+  bool report = false;       ///< with out_dir: also run the report (report/report.h) there
 };
 
 int run_replay_mode(const daemon::NavdConfig& config, const ReplayModeArgs& args,

@@ -12,6 +12,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <variant>
@@ -153,11 +154,22 @@ struct CheckpointConfig {
   int keep = 3;                                    ///< newest K kept, [1, 100]
 };
 
+/// `sim`: navd's default mode (no --replay, no device sensor) simulates this dive with
+/// nav::sim::simulate_dive when it is missing and replays it. Paths relative to the working
+/// directory.
+struct SimDiveConfig {
+  std::string dive_dir;       ///< required in the section
+  int seed = 1;               ///< [0, 2^31 - 1]
+  int images = 866;           ///< [2, 100000]
+  double outlier_rate = 0.05; ///< [0, 1], fraction of registrations that are outliers
+};
+
 struct NavdConfig {
   std::vector<SensorConfig> sensors;  ///< required, at least one
   FilterConfig filter;
   LcmConfig lcm;
   CheckpointConfig checkpoint;
+  std::optional<SimDiveConfig> sim;   ///< the `sim` section, if present
 };
 
 /// Parses YAML text; `source` names it in errors; relative file names in it (CAN signal tables)

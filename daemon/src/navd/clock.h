@@ -1,0 +1,16 @@
+#pragma once
+// CLOCK_MONOTONIC / CLOCK_REALTIME in microseconds (navd's publishers and pacing).
+#include <cstdint>
+#include <ctime>
+
+namespace nav::navd {
+
+inline std::int64_t clock_us(clockid_t id) {
+  timespec ts{};
+  clock_gettime(id, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000 + ts.tv_nsec / 1000;
+}
+inline std::int64_t monotonic_us() { return clock_us(CLOCK_MONOTONIC); }
+inline std::int64_t realtime_us() { return clock_us(CLOCK_REALTIME); }
+
+}  // namespace nav::navd
