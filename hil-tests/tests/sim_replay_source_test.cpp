@@ -35,6 +35,7 @@ TEST(SimReplaySource, DiveDecodesThroughNavdsSourceAtTheTruth) {
   SimOptions o;
   o.out_dir = dir.string();
   o.seed = 21;
+  o.sensor_errors = SensorErrorOptions::with_sensor_biases();  // biases must decode as such
   o.mission.images = 60;  // default sensor errors: biases, DVL clock offset/drift, dropouts
   const SimSummary s = simulate_dive(o, sim_config_path().string());
   const daemon::NavdConfig cfg = daemon::load_config_file((dir / "config.yaml").string());

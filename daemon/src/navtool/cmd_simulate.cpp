@@ -27,6 +27,7 @@ struct SimulateArgs {
   double outlier_rate = 0.05;
   bool json = false;
   bool render_images = false;
+  bool sensor_biases = false;
 };
 
 void draw_progress(double fraction) {
@@ -47,6 +48,7 @@ void run_simulate(const SimulateArgs& args) {
   o.mission.images = args.images;
   o.oracle.outlier_rate = args.outlier_rate;
   o.render_images = args.render_images;
+  if (args.sensor_biases) o.sensor_errors = sim::SensorErrorOptions::with_sensor_biases();
   if (::isatty(STDERR_FILENO)) o.progress = draw_progress;
   const auto start = std::chrono::steady_clock::now();
   sim::SimSummary s;
@@ -92,6 +94,9 @@ void add_simulate(CLI::App& app) {
   cmd->add_flag("--render-images", args->render_images,
                 "also render each frame (12-bit grey, strobe-lit height field) to "
                 "DIR/images/<frame %06d>.png with a thumbnail in NAV_IMAGE (~0.3 s per frame)");
+  cmd->add_flag("--sensor-biases", args->sensor_biases,
+                "uncalibrated vehicle: DVL scale factor 0.1 %, heading bias 0.05 deg, roll/pitch "
+                "bias 0.02 deg, depth bias 0.02 m (default 0: calibrated out before the dive)");
   cmd->add_flag("--json", args->json, "print sim.json's content on stdout");
   cmd->callback([args] { run_simulate(*args); });
 }

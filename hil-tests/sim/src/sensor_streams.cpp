@@ -50,6 +50,15 @@ const daemon::SensorConfig& require_sensor(const daemon::NavdConfig& c, daemon::
 
 }  // namespace
 
+SensorErrorOptions SensorErrorOptions::with_sensor_biases() {
+  SensorErrorOptions o;
+  o.dvl_scale_error = 0.001;
+  o.heading_bias_rad = 0.05 * std::numbers::pi / 180.0;
+  o.roll_pitch_bias_rad = 0.02 * std::numbers::pi / 180.0;
+  o.depth_bias_m = 0.02;
+  return o;
+}
+
 SensorErrorOptions SensorErrorOptions::ideal() {
   SensorErrorOptions o;
   o.dvl_scale_error = 0.0;

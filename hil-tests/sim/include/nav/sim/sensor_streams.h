@@ -31,10 +31,14 @@ inline std::int64_t realtime_of(std::int64_t monotonic_us) {
 
 /// Sensor errors beyond white noise. Defaults are small; every one may be set to 0.
 struct SensorErrorOptions {
-  double dvl_scale_error = 0.001;  ///< velocity scale factor error (0.1 %)
-  double heading_bias_rad = 0.05 * std::numbers::pi / 180.0;     ///< added to every heading
-  double roll_pitch_bias_rad = 0.02 * std::numbers::pi / 180.0;  ///< added to roll and pitch
-  double depth_bias_m = 0.02;  ///< pressure-sensor offset, expressed in depth
+  // Constant offsets a vehicle calibrates out before the dive (pressure zeroed at the surface,
+  // dockside heading calibration) and the DVL scale factor are 0 by default: the filter models
+  // white noise only, so the default dive is the consistency scenario (hil-tests/README.md).
+  // with_sensor_biases() (`navtool simulate --sensor-biases`) gives the uncalibrated vehicle.
+  double dvl_scale_error = 0.0;      ///< velocity scale factor error (with_sensor_biases: 0.1 %)
+  double heading_bias_rad = 0.0;     ///< added to every heading (with_sensor_biases: 0.05 deg)
+  double roll_pitch_bias_rad = 0.0;  ///< added to roll and pitch (with_sensor_biases: 0.02 deg)
+  double depth_bias_m = 0.0;         ///< pressure-sensor offset in depth (with_sensor_biases: 0.02)
   double altitude_bias_m = 0.0;
   double dvl_clock_offset_s = 0.37;    ///< DVL RTC minus true UTC at the dive start
   double dvl_clock_drift_ppm = 20.0;   ///< DVL RTC rate error
@@ -44,6 +48,9 @@ struct SensorErrorOptions {
   double serial_baud = 115200.0;  ///< for the gap between back-to-back sentences
   /// Zero every bias, clock error and dropout (white noise and latency stay).
   static SensorErrorOptions ideal();
+  /// The defaults plus uncalibrated constant errors: DVL scale factor 0.1 %, heading bias
+  /// 0.05 deg, roll/pitch bias 0.02 deg, depth bias 0.02 m.
+  static SensorErrorOptions with_sensor_biases();
   /// Empty when usable, else "<field>: <reason>".
   std::string validate() const;
 };
