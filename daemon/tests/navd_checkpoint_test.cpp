@@ -41,6 +41,16 @@ int wait_status(pid_t pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
 }
 
+/// Polls `file` until it contains `text` or `timeout` passes (then the caller's checks fail).
+void wait_for_text(const fs::path& file, const std::string& text,
+                   std::chrono::seconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (fs::exists(file) && read_text(file).find(text) != std::string::npos) return;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+}
+
 TEST(NavdCheckpoints, KilledReplayResumesToTheUninterruptedMap) {
   const fs::path root = fs::temp_directory_path() / ("navd_ckpt_" + std::to_string(::getpid()));
   fs::remove_all(root);
@@ -131,9 +141,9 @@ TEST(NavdCheckpoints, SigtermWritesTheShutdownCheckpoint) {
   EXPECT_EQ(wait_status(pid), 0) << read_text(root / "err.txt");
   EXPECT_EQ(nav::daemon::list_checkpoints(root / "checkpoints").size(), 1u);
   const pid_t again = start_shell(command);
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  wait_for_text(root / "err.txt", "resumed from", std::chrono::seconds(20));
   ::kill(again, SIGTERM);
-  EXPECT_EQ(wait_status(again), 0);
+  EXPECT_EQ(wait_status(again), 0) << read_text(root / "err.txt");
   const std::string err = read_text(root / "err.txt");
   EXPECT_NE(err.find("resumed from"), std::string::npos) << err;
   std::error_code ignored;

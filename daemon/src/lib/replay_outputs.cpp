@@ -135,6 +135,12 @@ nlohmann::json pose_json(const core::Vec12& x) {
           {"roll_rad", x(3)},    {"pitch_rad", x(4)},   {"heading_rad", x(5)}};
 }
 
+/// The robot's running pose, or null while the filter has no state yet (e.g. the
+/// dead-reckoning twin of a resumed replay stopped before its first measurements).
+nlohmann::json robot_pose_json(const core::Esdf& filter) {
+  if (!filter.initialized()) return nullptr;
+  return pose_json(filter.mean().head<12>());
+}
 
 }  // namespace
 
@@ -153,9 +159,9 @@ std::string replay_summary_json(const ReplayRun& run, const ReplayAnalysis& anal
   j["realtime_factor"] = run.wall_s > 0.0 ? run.log_span_s / run.wall_s : 0.0;
   j["analysis_s"] = analysis.analysis_s;
   j["final_pose"] = pose_json(analysis.robot_mean);
-  j["final_pose_running"] = pose_json(run.slam->esdf().mean().head<12>());
+  j["final_pose_running"] = robot_pose_json(run.slam->esdf());
   if (run.dead_reckoning) {
-    j["dead_reckoning_final_pose"] = pose_json(run.dead_reckoning->esdf().mean().head<12>());
+    j["dead_reckoning_final_pose"] = robot_pose_json(run.dead_reckoning->esdf());
   }
   j["max_cg_relative_residual"] = c.max_cg_relative_residual;
   j["cg_iterations_per_image"] = run.slam->options().recovery.iterations_per_step;

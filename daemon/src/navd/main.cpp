@@ -89,10 +89,9 @@ int run_default_mode(const daemon::NavdConfig& config, const Args& args,
   return navd::run_replay_mode(config, replay, signals, notifier);
 }
 
-int run(const Args& args) {
+int run(const Args& args, const sigset_t& signals) {
   daemon::NavdConfig config = daemon::load_config_file(args.config_path);
   if (!args.lcm_url.empty()) config.lcm.url = args.lcm_url;
-  const sigset_t signals = block_stop_signals();
   const daemon::SdNotifier notifier;
   if (!args.replay.empty()) {
     const navd::ReplayModeArgs replay{args.replay, args.config_path, args.speed,
@@ -113,13 +112,16 @@ int run(const Args& args) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // First of all, so that a SIGTERM during start-up (config, resume, simulation) is held
+  // pending for the mode's wait instead of killing the process with its default action.
+  const sigset_t signals = block_stop_signals();
   spdlog::set_default_logger(spdlog::stderr_color_mt("navd"));
   CLI::App app{"navd: navigation daemon (view-based SLAM information filter, ESDF)"};
   Args args;
   add_options(app, args);
   CLI11_PARSE(app, argc, argv);
   try {
-    return run(args);
+    return run(args, signals);
   } catch (const nav::daemon::ConfigError& e) {
     spdlog::error("navd: configuration: {}", e.what());
     return 2;
