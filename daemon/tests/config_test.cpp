@@ -16,13 +16,8 @@ namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-/// config/ beside this file's checkout; __FILE__ is relative to the build directory when ccache
-/// rewrites paths (base_dir), so fall back to the working directory (ctest runs in the source).
-std::filesystem::path config_dir() {
-  const auto beside =
-      std::filesystem::path(__FILE__).parent_path().parent_path().parent_path() / "config";
-  return std::filesystem::exists(beside / "sim.yaml") ? beside : std::filesystem::path("config");
-}
+/// config/ of this checkout (NAV_SOURCE_DIR, cmake/NavTargets.cmake).
+std::filesystem::path config_dir() { return std::filesystem::path(NAV_SOURCE_DIR) / "config"; }
 
 const char* kMinimal = R"(
 sensors:

@@ -27,7 +27,7 @@ using nav::drivers::CanSignalInput;
 using nlohmann::json;
 
 const std::string kExample =
-    (fs::path(__FILE__).parent_path() / "../../config/can/dvl_fog_example.yaml")
+    (fs::path(NAV_SOURCE_DIR) / "config/can/dvl_fog_example.yaml")
         .lexically_normal()
         .string();
 

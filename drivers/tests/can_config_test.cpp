@@ -14,7 +14,7 @@ namespace nav::drivers {
 namespace {
 
 const std::string kExample =
-    (std::filesystem::path(__FILE__).parent_path() / "../../config/can/dvl_fog_example.yaml")
+    (std::filesystem::path(NAV_SOURCE_DIR) / "config/can/dvl_fog_example.yaml")
         .lexically_normal()
         .string();
 
