@@ -222,8 +222,10 @@ void NavFilter::relinearise_robot() {
   }
   const Eigen::LLT<core::Mat12> llt(core::Mat12(info.diagonal_block(r)));
   if (llt.info() != Eigen::Success) return;
-  core::Vec12 robot = llt.solve(b);
-  for (int i = 3; i < 6; ++i) robot(i) = core::wrap_angle(robot(i));
+  // Not wrapped: the angles of the mean must stay on the branch η encodes. Wrapping only μ_r
+  // (η_r unchanged) shifts the next update's η_r += Hᵀ R⁻¹ (ν + H μ_r) by 2π·Hᵀ R⁻¹ H on a
+  // heading that crossed ±π, which moved the whole map 5.4 m in one turn of the default dive.
+  const core::Vec12 robot = llt.solve(b);
   if (robot.allFinite()) (void)filter_.set_mean_block(r, robot);
 }
 
