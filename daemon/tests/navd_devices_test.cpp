@@ -15,6 +15,8 @@
 #include <navlcm/raw_bytes_t.hpp>
 #include <thread>
 
+#include "support/udpm_probe.h"
+
 namespace nav::navd {
 namespace {
 
@@ -42,25 +44,12 @@ struct Received {
   }
 };
 
-/// True if a message published on udpm with ttl=0 comes back to this process.
-bool udpm_loops_back(lcm::LCM& lcm) {
-  bool received = false;
-  struct Probe {
-    bool* flag;
-    void on(const lcm::ReceiveBuffer*, const std::string&) { *flag = true; }
-  } probe{&received};
-  auto* sub = lcm.subscribe("NAVD_DEVICES_TEST_PROBE", &Probe::on, &probe);
-  const std::uint8_t byte = 1;
-  lcm.publish("NAVD_DEVICES_TEST_PROBE", &byte, 1);
-  for (int i = 0; i < 10 && !received; ++i) lcm.handleTimeout(50);
-  lcm.unsubscribe(sub);
-  return received;
-}
-
 TEST(NavdDevices, SerialSensorThreadPublishesRawBytesAndHealth) {
   lcm::LCM lcm(kUdpmUrl);
   if (!lcm.good()) GTEST_SKIP() << "LCM cannot open " << kUdpmUrl << " here (no multicast)";
-  if (!udpm_loops_back(lcm)) GTEST_SKIP() << "udpm ttl=0 does not loop back on this host";
+  if (!nav::tool::test::udpm_loops_back(lcm, "NAVD_DEVICES_TEST_PROBE")) {
+    GTEST_SKIP() << "udpm ttl=0 does not loop back on this host";
+  }
   int master = -1, slave = -1;
   char name[256] = {};
   ASSERT_EQ(::openpty(&master, &slave, name, nullptr, nullptr), 0);

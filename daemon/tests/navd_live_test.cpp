@@ -23,6 +23,8 @@
 #include <thread>
 #include <vector>
 
+#include "support/udpm_probe.h"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -135,20 +137,6 @@ struct Solutions {
   }
 };
 
-bool udpm_loops_back(lcm::LCM& lcm) {
-  bool received = false;
-  struct Probe {
-    bool* flag;
-    void on(const lcm::ReceiveBuffer*, const std::string&) { *flag = true; }
-  } probe{&received};
-  auto* sub = lcm.subscribe("NAVD_LIVE_TEST_PROBE", &Probe::on, &probe);
-  const std::uint8_t byte = 1;
-  lcm.publish("NAVD_LIVE_TEST_PROBE", &byte, 1);
-  for (int i = 0; i < 10 && !received; ++i) lcm.handleTimeout(50);
-  lcm.unsubscribe(sub);
-  return received;
-}
-
 TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
   const fs::path dir = fs::temp_directory_path() / ("navd_live_" + std::to_string(::getpid()));
   fs::create_directories(dir);
@@ -158,7 +146,7 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
   ASSERT_TRUE(heading.ok() && depth.ok()) << "openpty failed";
   const fs::path config = write_live_config(dir, heading, depth);
   lcm::LCM lcm(kUdpmUrl);
-  const bool udpm = lcm.good() && udpm_loops_back(lcm);
+  const bool udpm = lcm.good() && nav::tool::test::udpm_loops_back(lcm, "NAVD_LIVE_TEST_PROBE");
   Solutions got;
   if (udpm) lcm.subscribe("NAVD_SOLUTION", &Solutions::on, &got);
   const pid_t pid = spawn_navd({"--config", config.string(), "--lcm-url", kUdpmUrl}, dir);

@@ -26,6 +26,8 @@
 #include <thread>
 #include <vector>
 
+#include "support/udpm_probe.h"
+
 namespace {
 
 using nlohmann::json;
@@ -257,25 +259,12 @@ TEST(NavdSim, SigtermStopsWithinOneSecondAndExitsZero) {
   EXPECT_LT(j["images"].get<int>(), 12);  // stopped before the end
 }
 
-/// True if a message published on udpm with ttl=0 comes back to this process.
-bool udpm_loops_back(lcm::LCM& lcm) {
-  bool received = false;
-  struct Probe {
-    bool* flag;
-    void on(const lcm::ReceiveBuffer*, const std::string&) { *flag = true; }
-  } probe{&received};
-  auto* sub = lcm.subscribe("NAVD_SIM_TEST_PROBE", &Probe::on, &probe);
-  const std::uint8_t byte = 1;
-  lcm.publish("NAVD_SIM_TEST_PROBE", &byte, 1);
-  for (int i = 0; i < 10 && !received; ++i) lcm.handleTimeout(50);
-  lcm.unsubscribe(sub);
-  return received;
-}
-
 TEST(NavdSim, PublishesSolutionAndHealthOverUdpm) {
   lcm::LCM lcm(kUdpmUrl);
   if (!lcm.good()) GTEST_SKIP() << "LCM cannot open " << kUdpmUrl << " here (no multicast)";
-  if (!udpm_loops_back(lcm)) GTEST_SKIP() << "udpm ttl=0 does not loop back on this host";
+  if (!nav::tool::test::udpm_loops_back(lcm, "NAVD_SIM_TEST_PROBE")) {
+    GTEST_SKIP() << "udpm ttl=0 does not loop back on this host";
+  }
   int solutions = 0, health = 0;
   navlcm::nav_solution_t last{};
   struct Handler {
