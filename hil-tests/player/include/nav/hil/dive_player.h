@@ -1,0 +1,108 @@
+#pragma once
+// Hardware-in-the-loop playback of a recorded or simulated dive (hil-tests/README.md "Playing
+// a dive back"): every RAW_<NAME> message of the dive log is written, at its recorded host
+// time (CLOCK_MONOTONIC, scaled by `speed`), to the device the sensor's config transport
+// names in the navd config the player generates:
+//   * serial sensors (dvl_pd0, dvl_pd6, heading_nmea, fog_kvh, pressure_paro, altimeter):
+//     one pseudo-terminal each (pty_link.h), a stable symlink `<serial_dir>/<name>`;
+//   * CAN sensors (dvl_can): the log's candump lines as frames on a SocketCAN interface
+//     (vcan0 by default) when the kernel has it, else skipped with the reason;
+//   * cameras (NAV_IMAGE) and oracle registrations (NAV_REGISTRATION): not played yet (the
+//     Aravis fake GigE camera part is left to do); counted in the report.
+// The generated navd config is the dive's config.yaml with those transports (cameras and
+// skipped sensors keep `type: sim`, which navd's live mode does not open), without the `sim`
+// section, and with the LCM URL given.
+//
+// Time: navd stamps what it reads with the host clocks, so the dive's timing is preserved
+// only at speed 1. At speed > 1 the bytes arrive `speed` times faster: navd sees a dive
+// `speed` times shorter (velocities integrate over shorter intervals), useful to check
+// decoding and health, not the pose. The report gives the dive-to-host time mapping.
+//
+// Threads: construct, then call play() on one thread; `stop` may be set from any thread.
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace nav::hil {
+
+struct PlayerOptions {
+  double speed = 1.0;  ///< x real time, (0, 1000]; see the file comment for speed != 1
+  /// Directory of the pty links (created if missing); empty: `<dive dir>/hil`.
+  std::filesystem::path serial_dir;
+  std::string can_interface = "vcan0";  ///< SocketCAN interface for CAN sensors
+  /// Start the dive's clock only once every pty has a reader (navd opened its devices), so
+  /// navd sees the dive from its first byte; false: start at once.
+  bool wait_for_readers = true;
+  /// Give up waiting for readers after this long (0: wait until stopped).
+  std::chrono::milliseconds reader_timeout{0};
+  /// Called once when the dive's clock starts, with the dive's first host monotonic time and
+  /// the host monotonic time it is played at (µs): dive time t plays at
+  /// host_start + (t - dive_start) / speed.
+  std::function<void(std::int64_t dive_start_us, std::int64_t host_start_us)> on_start;
+
+  /// "" if valid, else what is wrong.
+  std::string validate() const;
+};
+
+enum class SensorOutput { kPty, kCan, kNotPlayed };
+
+struct PlayedSensor {
+  std::string name;
+  std::string type;  ///< config sensor type, e.g. "dvl_pd0"
+  SensorOutput output = SensorOutput::kNotPlayed;
+  std::filesystem::path device;     ///< pty link, or the CAN interface name
+  std::string note;                 ///< why it is not played ("" when played)
+  std::int64_t messages = 0;        ///< RAW_<NAME> messages written
+  std::int64_t bytes = 0;           ///< bytes (pty) or frames' data bytes (CAN) written
+  std::int64_t dropped_bytes = 0;   ///< pty: bytes the reader had no room for / no reader
+  std::int64_t dropped_frames = 0;  ///< CAN: lines that did not parse or frames not sent
+};
+
+struct PlayReport {
+  std::vector<PlayedSensor> sensors;
+  std::int64_t images_not_played = 0;                 ///< NAV_IMAGE events
+  std::int64_t registrations_not_played = 0;          ///< NAV_REGISTRATION events
+  std::int64_t raw_unknown_sensor = 0;                ///< RAW_ messages of no sensor in the config
+  std::int64_t dive_start_us = 0, host_start_us = 0;  ///< see PlayerOptions::on_start
+  double dive_span_s = 0.0;                           ///< first to last played message, dive time
+  double wall_s = 0.0;      ///< from the clock's start to the last message
+  double max_late_s = 0.0;  ///< worst lateness of a write against its schedule
+  bool started = false;     ///< false: stopped or timed out while waiting for readers
+  bool stopped = false;     ///< `stop` ended it before the end of the log
+};
+
+class DivePlayer {
+ public:
+  /// `dive` is a dive directory (dive.lcmlog + config.yaml) or a log file (its directory's
+  /// config.yaml is used). Loads and validates the config, opens the ptys and the CAN bus.
+  /// Throws std::runtime_error (or daemon::ConfigError) with the file and reason.
+  DivePlayer(const std::filesystem::path& dive, PlayerOptions options);
+  ~DivePlayer();
+  DivePlayer(const DivePlayer&) = delete;
+  DivePlayer& operator=(const DivePlayer&) = delete;
+
+  /// Per-sensor plan (counters are zero until play()).
+  const std::vector<PlayedSensor>& sensors() const;
+  const std::filesystem::path& log_path() const;
+  /// Where the pty links are (PlayerOptions::serial_dir or its default).
+  const std::filesystem::path& serial_dir() const;
+
+  /// Writes the navd config for this playback to `path` and checks that navd's loader
+  /// accepts it. Throws std::runtime_error / daemon::ConfigError naming the file.
+  void write_navd_config(const std::filesystem::path& path, const std::string& lcm_url) const;
+
+  /// Plays the log to its end or until `stop`. Blocks.
+  PlayReport play(const std::atomic<bool>& stop);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace nav::hil

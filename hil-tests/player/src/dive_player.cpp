@@ -1,0 +1,220 @@
+// DivePlayer: schedules a dive log's RAW_<NAME> messages onto ptys and SocketCAN at their
+// recorded host times; see dive_player.h.
+#include "nav/hil/dive_player.h"
+
+#include <time.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+#include <variant>
+
+#include "can_output.h"
+#include "nav/daemon/config.h"
+#include "nav/daemon/dive_log.h"
+#include "nav/hil/pty_link.h"
+#include "navd_config_yaml.h"
+
+namespace nav::hil {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::int64_t monotonic_now_us() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
+}
+
+/// Sleeps until host monotonic `until_us`, in slices so that `stop` is seen within 50 ms.
+void sleep_until_us(std::int64_t until_us, const std::atomic<bool>& stop) {
+  constexpr std::int64_t kSliceUs = 50'000;
+  for (std::int64_t now = monotonic_now_us(); now < until_us && !stop.load();
+       now = monotonic_now_us()) {
+    const std::int64_t wake = std::min(until_us, now + kSliceUs);
+    const timespec ts{static_cast<time_t>(wake / 1'000'000),
+                      static_cast<long>((wake % 1'000'000) * 1000)};
+    ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+  }
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path.string() + ": cannot read");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+bool is_serial_type(daemon::SensorType type) {
+  using T = daemon::SensorType;
+  return type == T::kDvlPd0 || type == T::kDvlPd6 || type == T::kHeadingNmea ||
+         type == T::kFogKvh || type == T::kPressureParo || type == T::kAltimeter;
+}
+
+}  // namespace
+
+std::string PlayerOptions::validate() const {
+  if (!(speed > 0.0 && speed <= 1000.0)) {
+    return "speed " + std::to_string(speed) + " is not in (0, 1000]";
+  }
+  if (can_interface.empty()) return "can_interface is empty";
+  if (reader_timeout.count() < 0) return "reader_timeout is negative";
+  return {};
+}
+
+struct DivePlayer::Impl {
+  PlayerOptions options;
+  fs::path log_path, config_path;
+  std::string config_text;
+  std::vector<PlayedSensor> sensors;
+  std::map<std::string, std::size_t> by_name;
+  std::map<std::size_t, std::unique_ptr<PtyLink>> ptys;  ///< by sensor index
+  CanOutput can;
+
+  void resolve_paths(const fs::path& dive);
+  void plan_sensors(const daemon::NavdConfig& config);
+  bool wait_for_readers(const std::atomic<bool>& stop) const;
+  void write_raw(const navlcm::raw_bytes_t& raw, PlayReport& report);
+};
+
+void DivePlayer::Impl::resolve_paths(const fs::path& dive) {
+  const bool dir = fs::is_directory(dive);
+  log_path = dir ? dive / "dive.lcmlog" : dive;
+  config_path = (dir ? dive : dive.parent_path()) / "config.yaml";
+  if (!fs::exists(log_path)) throw std::runtime_error(log_path.string() + ": no such dive log");
+  if (!fs::exists(config_path)) {
+    throw std::runtime_error(config_path.string() + ": no config.yaml beside the dive log");
+  }
+  if (options.serial_dir.empty()) options.serial_dir = config_path.parent_path() / "hil";
+}
+
+void DivePlayer::Impl::plan_sensors(const daemon::NavdConfig& config) {
+  std::string can_error;
+  for (const daemon::SensorConfig& s : config.sensors) {
+    PlayedSensor p;
+    p.name = s.name;
+    p.type = daemon::to_string(s.type);
+    const std::size_t index = sensors.size();
+    if (is_serial_type(s.type)) {
+      fs::create_directories(options.serial_dir);
+      ptys[index] = std::make_unique<PtyLink>(options.serial_dir / s.name);
+      p.output = SensorOutput::kPty;
+      p.device = ptys[index]->link_path();
+    } else if (s.type == daemon::SensorType::kDvlCan) {
+      if (!can.is_open() && can_error.empty()) can_error = can.open(options.can_interface);
+      p.output = can.is_open() ? SensorOutput::kCan : SensorOutput::kNotPlayed;
+      p.device = options.can_interface;
+      if (!can.is_open()) p.note = "CAN skipped: " + can_error;
+    } else {
+      p.note = "camera frames are not played (the Aravis fake GigE camera part is not done)";
+    }
+    by_name[p.name] = index;
+    sensors.push_back(std::move(p));
+  }
+}
+
+bool DivePlayer::Impl::wait_for_readers(const std::atomic<bool>& stop) const {
+  const std::int64_t give_up_us = options.reader_timeout.count() > 0
+                                      ? monotonic_now_us() + options.reader_timeout.count() * 1000
+                                      : INT64_MAX;
+  while (!stop.load() && monotonic_now_us() < give_up_us) {
+    const bool all = std::all_of(ptys.begin(), ptys.end(),
+                                 [](const auto& p) { return p.second->reader_attached(); });
+    if (all) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return false;
+}
+
+void DivePlayer::Impl::write_raw(const navlcm::raw_bytes_t& raw, PlayReport& report) {
+  const auto it = by_name.find(raw.device);
+  if (it == by_name.end()) {
+    ++report.raw_unknown_sensor;
+    return;
+  }
+  PlayedSensor& sensor = report.sensors[it->second];
+  const std::span<const std::uint8_t> bytes(raw.data.data(), raw.data.size());
+  if (sensor.output == SensorOutput::kPty) {
+    const std::size_t written = ptys.at(it->second)->write(bytes);
+    sensor.bytes += static_cast<std::int64_t>(written);
+    sensor.dropped_bytes += static_cast<std::int64_t>(bytes.size() - written);
+  } else if (sensor.output == SensorOutput::kCan) {
+    can.write(bytes, sensor);
+  } else {
+    return;
+  }
+  ++sensor.messages;
+}
+
+DivePlayer::DivePlayer(const fs::path& dive, PlayerOptions options)
+    : impl_(std::make_unique<Impl>()) {
+  if (std::string why = options.validate(); !why.empty()) {
+    throw std::runtime_error("hil player options: " + why);
+  }
+  impl_->options = std::move(options);
+  impl_->resolve_paths(dive);
+  impl_->config_text = read_text(impl_->config_path);
+  impl_->plan_sensors(daemon::load_config_file(impl_->config_path.string()));
+}
+
+DivePlayer::~DivePlayer() = default;
+
+const std::vector<PlayedSensor>& DivePlayer::sensors() const { return impl_->sensors; }
+const fs::path& DivePlayer::log_path() const { return impl_->log_path; }
+const fs::path& DivePlayer::serial_dir() const { return impl_->options.serial_dir; }
+
+void DivePlayer::write_navd_config(const fs::path& path, const std::string& lcm_url) const {
+  const std::string text = hil_navd_config_yaml(
+      impl_->config_text, fs::absolute(impl_->config_path).parent_path(), impl_->sensors, lcm_url);
+  {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out << text;
+    if (!out) throw std::runtime_error(path.string() + ": cannot write the navd config");
+  }
+  (void)daemon::load_config_file(path.string());  // navd must accept it
+}
+
+PlayReport DivePlayer::play(const std::atomic<bool>& stop) {
+  PlayReport report;
+  report.sensors = impl_->sensors;
+  if (impl_->options.wait_for_readers && !impl_->wait_for_readers(stop)) return report;
+  daemon::DiveLogReader reader(impl_->log_path.string());
+  const double speed = impl_->options.speed;
+  std::int64_t last_dive_us = 0, last_write_us = 0;
+  while (!stop.load()) {
+    std::optional<daemon::DiveLogEvent> event = reader.next();
+    if (!event) break;
+    if (std::holds_alternative<navlcm::image_metadata_t>(*event)) ++report.images_not_played;
+    if (std::holds_alternative<navlcm::registration_t>(*event)) ++report.registrations_not_played;
+    const auto* raw = std::get_if<navlcm::raw_bytes_t>(&*event);
+    if (!raw) continue;
+    if (!report.started) {
+      report.started = true;
+      report.dive_start_us = raw->host_monotonic_us;
+      report.host_start_us = monotonic_now_us();
+      if (impl_->options.on_start)
+        impl_->options.on_start(report.dive_start_us, report.host_start_us);
+    }
+    const double offset_us = static_cast<double>(raw->host_monotonic_us - report.dive_start_us);
+    const std::int64_t due_us = report.host_start_us + std::llround(offset_us / speed);
+    sleep_until_us(due_us, stop);
+    if (stop.load()) break;
+    last_write_us = monotonic_now_us();
+    report.max_late_s = std::max(report.max_late_s, (last_write_us - due_us) * 1e-6);
+    impl_->write_raw(*raw, report);
+    last_dive_us = raw->host_monotonic_us;
+  }
+  report.stopped = stop.load();
+  if (report.started) {
+    report.dive_span_s = (last_dive_us - report.dive_start_us) * 1e-6;
+    report.wall_s = (last_write_us - report.host_start_us) * 1e-6;
+  }
+  return report;
+}
+
+}  // namespace nav::hil

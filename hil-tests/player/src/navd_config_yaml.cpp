@@ -1,0 +1,83 @@
+// hil_navd_config_yaml: rewrites the transports of a dive's config for navd's live mode.
+#include "navd_config_yaml.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <stdexcept>
+
+namespace nav::hil {
+namespace {
+
+const PlayedSensor* find_sensor(const std::vector<PlayedSensor>& sensors, const std::string& name) {
+  for (const PlayedSensor& s : sensors) {
+    if (s.name == name) return &s;
+  }
+  return nullptr;
+}
+
+YAML::Node serial_transport(const YAML::Node& recorded, const PlayedSensor& sensor) {
+  YAML::Node t;
+  t["type"] = "serial";
+  t["device"] = sensor.device.string();
+  const bool was_serial = recorded["type"] && recorded["type"].as<std::string>() == "serial";
+  t["baud"] = was_serial && recorded["baud"] ? recorded["baud"].as<int>() : 115200;
+  for (const char* key : {"parity", "flow"}) {
+    if (was_serial && recorded[key]) t[key] = recorded[key].as<std::string>();
+  }
+  return t;
+}
+
+YAML::Node can_transport(const YAML::Node& recorded, const PlayedSensor& sensor,
+                         const std::filesystem::path& config_dir) {
+  YAML::Node t;
+  t["type"] = "can";
+  t["interface"] = sensor.device.string();
+  if (recorded["signals_file"]) {
+    std::filesystem::path table = recorded["signals_file"].as<std::string>();
+    if (table.is_relative()) table = std::filesystem::absolute(config_dir / table);
+    t["signals_file"] = table.string();
+  }
+  return t;
+}
+
+YAML::Node played_transport(const YAML::Node& recorded, const PlayedSensor& sensor,
+                            const std::filesystem::path& config_dir) {
+  switch (sensor.output) {
+    case SensorOutput::kPty:
+      return serial_transport(recorded, sensor);
+    case SensorOutput::kCan:
+      return can_transport(recorded, sensor, config_dir);
+    case SensorOutput::kNotPlayed:
+      break;
+  }
+  YAML::Node t;
+  t["type"] = "sim";  // navd's live mode opens no device for it
+  return t;
+}
+
+}  // namespace
+
+std::string hil_navd_config_yaml(const std::string& dive_config_yaml,
+                                 const std::filesystem::path& dive_config_dir,
+                                 const std::vector<PlayedSensor>& sensors,
+                                 const std::string& lcm_url) {
+  YAML::Node root = YAML::Load(dive_config_yaml);
+  if (!root.IsMap() || !root["sensors"] || !root["sensors"].IsSequence()) {
+    throw std::runtime_error("dive config: not a YAML map with a sensors list");
+  }
+  for (YAML::Node sensor : root["sensors"]) {
+    const std::string name = sensor["name"] ? sensor["name"].as<std::string>() : "";
+    const PlayedSensor* played = find_sensor(sensors, name);
+    if (!played) throw std::runtime_error("dive config: sensor '" + name + "' has no plan");
+    sensor["transport"] = played_transport(sensor["transport"], *played, dive_config_dir);
+  }
+  root.remove("sim");
+  root["lcm"]["url"] = lcm_url;
+  YAML::Emitter out;
+  out << root;
+  return "# navd config for hardware-in-the-loop playback (navtool hil-play,\n"
+         "# hil-tests/README.md); generated from the dive's config.yaml.\n" +
+         std::string(out.c_str()) + "\n";
+}
+
+}  // namespace nav::hil
