@@ -29,6 +29,7 @@ struct HilPlayArgs {
   std::string config_out;
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   bool no_wait = false;
+  bool no_camera = false;
   double reader_timeout_s = 0.0;
   bool json = false;
 };
@@ -39,6 +40,8 @@ const char* output_name(hil::SensorOutput output) {
       return "pty";
     case hil::SensorOutput::kCan:
       return "can";
+    case hil::SensorOutput::kGige:
+      return "gige";
     case hil::SensorOutput::kNotPlayed:
       break;
   }
@@ -76,8 +79,9 @@ void print_plan(const hil::DivePlayer& player, const std::string& config_path, d
     if (s.output == hil::SensorOutput::kNotPlayed) {
       std::fprintf(stderr, "  %s (%s): %s\n", s.name.c_str(), s.type.c_str(), s.note.c_str());
     } else {
-      std::fprintf(stderr, "  %s (%s): %s %s\n", s.name.c_str(), s.type.c_str(),
-                   output_name(s.output), s.device.c_str());
+      std::fprintf(stderr, "  %s (%s): %s %s%s%s\n", s.name.c_str(), s.type.c_str(),
+                   output_name(s.output), s.device.c_str(), s.note.empty() ? "" : ": ",
+                   s.note.c_str());
     }
   }
   std::fprintf(stderr, "navd config: %s\n  run: navd --config %s\n", config_path.c_str(),
@@ -96,6 +100,7 @@ void run_hil_play(const HilPlayArgs& args) {
   o.serial_dir = args.serial_dir;
   o.can_interface = args.can_interface;
   o.wait_for_readers = !args.no_wait;
+  o.fake_gige_camera = !args.no_camera;
   o.reader_timeout = std::chrono::milliseconds(static_cast<long>(args.reader_timeout_s * 1e3));
   std::unique_ptr<hil::DivePlayer> player;
   std::string config_path = args.config_out;
@@ -145,6 +150,8 @@ void add_hil_play(CLI::App& app) {
   cmd->add_option("--lcm-url", args->lcm_url, "lcm.url of the written navd config");
   cmd->add_flag("--no-wait", args->no_wait,
                 "start at once instead of when every pty has a reader (navd opened them)");
+  cmd->add_flag("--no-camera", args->no_camera,
+                "do not serve camera_gige sensors with Aravis' fake GigE camera on lo");
   cmd->add_option("--reader-timeout-s", args->reader_timeout_s,
                   "give up waiting for readers after this long (default 0: wait)")
       ->check(CLI::Range(0.0, 86400.0));

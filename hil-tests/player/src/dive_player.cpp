@@ -3,6 +3,7 @@
 #include "nav/hil/dive_player.h"
 
 #include <time.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -14,6 +15,7 @@
 #include <variant>
 
 #include "can_output.h"
+#include "fake_gige_camera.h"
 #include "nav/daemon/config.h"
 #include "nav/daemon/dive_log.h"
 #include "nav/hil/pty_link.h"
@@ -75,11 +77,14 @@ struct DivePlayer::Impl {
   std::map<std::string, std::size_t> by_name;
   std::map<std::size_t, std::unique_ptr<PtyLink>> ptys;  ///< by sensor index
   CanOutput can;
+  FakeGigeCamera camera;
 
   void resolve_paths(const fs::path& dive);
   void plan_sensors(const daemon::NavdConfig& config);
+  void plan_camera(const daemon::SensorConfig& sensor, PlayedSensor& p);
   bool wait_for_readers(const std::atomic<bool>& stop) const;
-  void write_raw(const navlcm::raw_bytes_t& raw, PlayReport& report);
+  /// Whether the message went to a device.
+  bool write_raw(const navlcm::raw_bytes_t& raw, PlayReport& report);
 };
 
 void DivePlayer::Impl::resolve_paths(const fs::path& dive) {
@@ -111,10 +116,28 @@ void DivePlayer::Impl::plan_sensors(const daemon::NavdConfig& config) {
       p.device = options.can_interface;
       if (!can.is_open()) p.note = "CAN skipped: " + can_error;
     } else {
-      p.note = "camera frames are not played (the Aravis fake GigE camera part is not done)";
+      plan_camera(s, p);
     }
     by_name[p.name] = index;
     sensors.push_back(std::move(p));
+  }
+}
+
+void DivePlayer::Impl::plan_camera(const daemon::SensorConfig& sensor, PlayedSensor& p) {
+  if (sensor.type != daemon::SensorType::kCameraGige) {
+    p.note = "not played (no V4L2 loopback device is used)";
+  } else if (!options.fake_gige_camera) {
+    p.note = "not played (fake GigE camera disabled)";
+  } else if (camera.running()) {
+    p.note = "not played (the fake GigE camera serves the first camera_gige sensor only)";
+  } else if (std::string why = camera.start("NAVHIL" + std::to_string(::getpid())); !why.empty()) {
+    p.note = "not played: " + why;
+  } else {
+    p.output = SensorOutput::kGige;
+    p.device = FakeGigeCamera::kAddress;
+    p.note =
+        "Aravis fake GigE camera on lo: its test pattern at navd's trigger rate (the "
+        "dive's image times and frames are not reproduced)";
   }
 }
 
@@ -131,11 +154,11 @@ bool DivePlayer::Impl::wait_for_readers(const std::atomic<bool>& stop) const {
   return false;
 }
 
-void DivePlayer::Impl::write_raw(const navlcm::raw_bytes_t& raw, PlayReport& report) {
+bool DivePlayer::Impl::write_raw(const navlcm::raw_bytes_t& raw, PlayReport& report) {
   const auto it = by_name.find(raw.device);
   if (it == by_name.end()) {
     ++report.raw_unknown_sensor;
-    return;
+    return false;
   }
   PlayedSensor& sensor = report.sensors[it->second];
   const std::span<const std::uint8_t> bytes(raw.data.data(), raw.data.size());
@@ -146,9 +169,10 @@ void DivePlayer::Impl::write_raw(const navlcm::raw_bytes_t& raw, PlayReport& rep
   } else if (sensor.output == SensorOutput::kCan) {
     can.write(bytes, sensor);
   } else {
-    return;
+    return false;
   }
   ++sensor.messages;
+  return true;
 }
 
 DivePlayer::DivePlayer(const fs::path& dive, PlayerOptions options)
@@ -206,8 +230,7 @@ PlayReport DivePlayer::play(const std::atomic<bool>& stop) {
     if (stop.load()) break;
     last_write_us = monotonic_now_us();
     report.max_late_s = std::max(report.max_late_s, (last_write_us - due_us) * 1e-6);
-    impl_->write_raw(*raw, report);
-    last_dive_us = raw->host_monotonic_us;
+    if (impl_->write_raw(*raw, report)) last_dive_us = raw->host_monotonic_us;
   }
   report.stopped = stop.load();
   if (report.started) {

@@ -40,6 +40,13 @@ YAML::Node can_transport(const YAML::Node& recorded, const PlayedSensor& sensor,
   return t;
 }
 
+YAML::Node gige_transport(const PlayedSensor& sensor) {
+  YAML::Node t;
+  t["type"] = "gige";
+  t["camera_id"] = sensor.device.string();
+  return t;
+}
+
 YAML::Node played_transport(const YAML::Node& recorded, const PlayedSensor& sensor,
                             const std::filesystem::path& config_dir) {
   switch (sensor.output) {
@@ -47,6 +54,8 @@ YAML::Node played_transport(const YAML::Node& recorded, const PlayedSensor& sens
       return serial_transport(recorded, sensor);
     case SensorOutput::kCan:
       return can_transport(recorded, sensor, config_dir);
+    case SensorOutput::kGige:
+      return gige_transport(sensor);
     case SensorOutput::kNotPlayed:
       break;
   }
@@ -70,6 +79,12 @@ std::string hil_navd_config_yaml(const std::string& dive_config_yaml,
     const PlayedSensor* played = find_sensor(sensors, name);
     if (!played) throw std::runtime_error("dive config: sensor '" + name + "' has no plan");
     sensor["transport"] = played_transport(sensor["transport"], *played, dive_config_dir);
+    YAML::Node camera = sensor["camera"];
+    const bool mono12 =
+        camera && camera["pixel_format"] && camera["pixel_format"].as<std::string>() == "mono12";
+    if (played->output == SensorOutput::kGige && mono12) {
+      camera["pixel_format"] = "mono16";  // Aravis' stock fake camera has no Mono12
+    }
   }
   root.remove("sim");
   root["lcm"]["url"] = lcm_url;

@@ -7,11 +7,15 @@
 //     one pseudo-terminal each (pty_link.h), a stable symlink `<serial_dir>/<name>`;
 //   * CAN sensors (dvl_can): the log's candump lines as frames on a SocketCAN interface
 //     (vcan0 by default) when the kernel has it, else skipped with the reason;
-//   * cameras (NAV_IMAGE) and oracle registrations (NAV_REGISTRATION): not played yet (the
-//     Aravis fake GigE camera part is left to do); counted in the report.
-// The generated navd config is the dive's config.yaml with those transports (cameras and
-// skipped sensors keep `type: sim`, which navd's live mode does not open), without the `sim`
-// section, and with the LCM URL given.
+//   * the first camera_gige sensor: Aravis' fake GigE Vision camera on lo (fake_gige_camera.h,
+//     camera_id 127.0.0.1, Mono12 configs served as Mono16: the stock fake has no Mono12). It
+//     streams the fake's test pattern when navd triggers it (camera.trigger, frame_rate_hz):
+//     the dive's NAV_IMAGE times and frames are NOT reproduced; counted in the report;
+//   * oracle registrations (NAV_REGISTRATION): not played (navd's live mode has no
+//     registration source); counted in the report.
+// The generated navd config is the dive's config.yaml with those transports (sensors not
+// played keep `type: sim`, which navd's live mode does not open), without the `sim` section,
+// and with the LCM URL given.
 //
 // Time: navd stamps what it reads with the host clocks, so the dive's timing is preserved
 // only at speed 1. At speed > 1 the bytes arrive `speed` times faster: navd sees a dive
@@ -36,6 +40,9 @@ struct PlayerOptions {
   /// Directory of the pty links (created if missing); empty: `<dive dir>/hil`.
   std::filesystem::path serial_dir;
   std::string can_interface = "vcan0";  ///< SocketCAN interface for CAN sensors
+  /// Serve the first camera_gige sensor with Aravis' fake GigE camera on lo (one per network
+  /// namespace: GVCP port 3956); false: cameras are not played.
+  bool fake_gige_camera = true;
   /// Start the dive's clock only once every pty has a reader (navd opened its devices), so
   /// navd sees the dive from its first byte; false: start at once.
   bool wait_for_readers = true;
@@ -50,7 +57,7 @@ struct PlayerOptions {
   std::string validate() const;
 };
 
-enum class SensorOutput { kPty, kCan, kNotPlayed };
+enum class SensorOutput { kPty, kCan, kGige, kNotPlayed };
 
 struct PlayedSensor {
   std::string name;
