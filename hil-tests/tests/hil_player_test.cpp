@@ -7,6 +7,7 @@
 // player gives up and plays nothing.
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <stdio.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -14,6 +15,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
 #include <variant>
@@ -236,6 +238,36 @@ TEST(HilPlayer, RejectsBadOptionsAndMissingFiles) {
     EXPECT_NE(std::string(e.what()).find("dive.lcmlog: no such dive log"), std::string::npos)
         << e.what();
   }
+}
+
+TEST(HilPlayer, NavtoolHilPlayWritesTheConfigAndReportsJson) {
+  const fs::path dir = nav::sim::test::scratch_dir("hil_player_navtool");
+  make_dive(dir);
+  const std::string cmd = std::string(NAVTOOL_PATH) + " hil-play " + dir.string() +
+                          " --speed 100 --no-wait --no-camera --json --lcm-url memq:// 2>" +
+                          (dir / "stderr").string();
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string out;
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, pipe)) out += buf;
+  ASSERT_EQ(::pclose(pipe), 0) << nav::sim::test::file_text(dir / "stderr");
+  const nlohmann::json j = nlohmann::json::parse(out);
+  EXPECT_TRUE(j["started"].get<bool>());
+  ASSERT_EQ(j["sensors"].size(), 4u);
+  EXPECT_EQ(j["sensors"][0]["name"], "heading");
+  EXPECT_EQ(j["sensors"][0]["output"], "pty");
+  EXPECT_EQ(j["sensors"][0]["messages"].get<int>(), 20);  // written; no reader: bytes dropped
+  EXPECT_EQ(j["sensors"][3]["output"], "not_played");
+  EXPECT_EQ(j["raw_unknown_sensor"].get<int>(), 1);
+  const std::string err = nav::sim::test::file_text(dir / "stderr");
+  EXPECT_NE(err.find("run: navd --config " + (dir / "hil" / "navd-hil.yaml").string()),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find("warning: --speed 100"), std::string::npos) << err;
+  EXPECT_EQ(nav::daemon::load_config_file((dir / "hil" / "navd-hil.yaml").string()).lcm.url,
+            "memq://");
+  EXPECT_FALSE(fs::exists(dir / "hil" / "heading"));  // the pty link goes with the player
 }
 
 ::testing::Environment* const kCleanup =

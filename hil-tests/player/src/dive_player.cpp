@@ -83,6 +83,8 @@ struct DivePlayer::Impl {
   void plan_sensors(const daemon::NavdConfig& config);
   void plan_camera(const daemon::SensorConfig& sensor, PlayedSensor& p);
   bool wait_for_readers(const std::atomic<bool>& stop) const;
+  /// The dive's first message (at `dive_us`) plays now.
+  void start_clock(std::int64_t dive_us, PlayReport& report) const;
   /// Whether the message went to a device.
   bool write_raw(const navlcm::raw_bytes_t& raw, PlayReport& report);
 };
@@ -154,6 +156,13 @@ bool DivePlayer::Impl::wait_for_readers(const std::atomic<bool>& stop) const {
   return false;
 }
 
+void DivePlayer::Impl::start_clock(std::int64_t dive_us, PlayReport& report) const {
+  report.started = true;
+  report.dive_start_us = dive_us;
+  report.host_start_us = monotonic_now_us();
+  if (options.on_start) options.on_start(report.dive_start_us, report.host_start_us);
+}
+
 bool DivePlayer::Impl::write_raw(const navlcm::raw_bytes_t& raw, PlayReport& report) {
   const auto it = by_name.find(raw.device);
   if (it == by_name.end()) {
@@ -217,13 +226,7 @@ PlayReport DivePlayer::play(const std::atomic<bool>& stop) {
     if (std::holds_alternative<navlcm::registration_t>(*event)) ++report.registrations_not_played;
     const auto* raw = std::get_if<navlcm::raw_bytes_t>(&*event);
     if (!raw) continue;
-    if (!report.started) {
-      report.started = true;
-      report.dive_start_us = raw->host_monotonic_us;
-      report.host_start_us = monotonic_now_us();
-      if (impl_->options.on_start)
-        impl_->options.on_start(report.dive_start_us, report.host_start_us);
-    }
+    if (!report.started) impl_->start_clock(raw->host_monotonic_us, report);
     const double offset_us = static_cast<double>(raw->host_monotonic_us - report.dive_start_us);
     const std::int64_t due_us = report.host_start_us + std::llround(offset_us / speed);
     sleep_until_us(due_us, stop);
