@@ -70,6 +70,7 @@ struct TrackErrors {
   int compared = 0;
   int with_delayed_states = 0;  ///< solutions published after an image (a recovered covariance)
   double last_sigma_xy_m = 0.0;
+  double max_xy_error_over_sigma = 0.0;  ///< XY error / sqrt(var_x + var_y), after an image
 };
 
 /// Symmetry and smallest eigenvalue of a recovered pose covariance, its XY sigma.
@@ -100,7 +101,12 @@ TrackErrors track_errors(const std::vector<navlcm::nav_solution_t>& solutions, c
     e.depth_m = std::max(e.depth_m, std::abs(s.p_world_m[2] - t[3]));
     e.heading_rad = std::max(e.heading_rad, std::abs(wrap_pi(s.rph_rad[2] - t[6])));
     ++e.compared;
-    if (s.num_delayed_states > 0) add_covariance(s, e);
+    if (s.num_delayed_states > 0) {
+      add_covariance(s, e);
+      e.max_xy_error_over_sigma =
+          std::max(e.max_xy_error_over_sigma,
+                   std::hypot(s.p_world_m[0] - t[1], s.p_world_m[1] - t[2]) / e.last_sigma_xy_m);
+    }
   }
   return e;
 }
@@ -229,9 +235,10 @@ TEST(HilPlayback, NavdOnPlayedPtysTracksTheTruthAndReportsHealthyRates) {
   const TrackErrors e = track_errors(got.solutions, Truth(dir / "dive" / "truth.csv"), report);
   std::printf(
       "%d solutions vs truth: max XY error %.3f m, depth %.3f m, heading %.3f deg; %d with a "
-      "recovered covariance: min eigenvalue %.3g, asymmetry %.3g, last XY sigma %.3f m\n",
+      "recovered covariance: min eigenvalue %.3g, asymmetry %.3g, last XY sigma %.3f m, max XY "
+      "error / sigma %.2f\n",
       e.compared, e.horizontal_m, e.depth_m, e.heading_rad * 180.0 / M_PI, e.with_delayed_states,
-      e.min_eigenvalue, e.asymmetry, e.last_sigma_xy_m);
+      e.min_eigenvalue, e.asymmetry, e.last_sigma_xy_m, e.max_xy_error_over_sigma);
   EXPECT_GE(e.compared, static_cast<int>(report.dive_span_s * 10 * 0.8));  // 10 Hz
   EXPECT_LT(e.horizontal_m, 0.25);
   EXPECT_LT(e.depth_m, 0.1);
@@ -240,6 +247,7 @@ TEST(HilPlayback, NavdOnPlayedPtysTracksTheTruthAndReportsHealthyRates) {
     EXPECT_GT(e.with_delayed_states, 0) << "no solution after an image";
     EXPECT_LT(e.asymmetry, 1e-9);
     EXPECT_GE(e.min_eigenvalue, 0.0);
+    EXPECT_LT(e.max_xy_error_over_sigma, 3.0);  // the truth inside navd's own 3-sigma
   } else {
     std::printf("camera not played: the published covariance is navd's placeholder, not checked\n");
   }
