@@ -10,6 +10,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 
 #include "nav/daemon/config.h"
 #include "nav/hil/dive_player.h"
@@ -30,6 +31,7 @@ struct HilPlayArgs {
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   bool no_wait = false;
   bool no_camera = false;
+  bool hold = false;
   double reader_timeout_s = 0.0;
   bool json = false;
 };
@@ -67,6 +69,7 @@ nlohmann::json report_json(const hil::PlayReport& r) {
           {"dive_span_s", r.dive_span_s},
           {"wall_s", r.wall_s},
           {"max_late_s", r.max_late_s},
+          {"late_writes", r.late_writes},
           {"dive_start_us", r.dive_start_us},
           {"host_start_us", r.host_start_us},
           {"images_not_played", r.images_not_played},
@@ -121,9 +124,16 @@ void run_hil_play(const HilPlayArgs& args) {
   } catch (const std::exception& e) {
     throw CommandError(std::string("hil-play: ") + e.what());
   }
-  std::fprintf(stderr, "hil-play: %s: %.1f s of dive in %.1f s, worst lateness %.1f ms%s\n",
+  std::fprintf(stderr,
+               "hil-play: %s: %.1f s of dive in %.1f s, worst lateness %.1f ms, %lld writes "
+               "> 10 ms late%s\n",
                player->log_path().c_str(), report.dive_span_s, report.wall_s,
-               report.max_late_s * 1e3, report.stopped ? " (stopped)" : "");
+               report.max_late_s * 1e3, static_cast<long long>(report.late_writes),
+               report.stopped ? " (stopped)" : "");
+  if (args.hold && report.started && !report.stopped) {
+    std::fprintf(stderr, "holding the devices open until Ctrl-C / SIGTERM\n");
+    while (!g_stop.load()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
   if (args.json) std::cout << report_json(report).dump() << std::endl;
   if (!report.started && !report.stopped) {
     throw CommandError("hil-play: no reader opened every pty within --reader-timeout-s");
@@ -155,6 +165,9 @@ void add_hil_play(CLI::App& app) {
   cmd->add_option("--reader-timeout-s", args->reader_timeout_s,
                   "give up waiting for readers after this long (default 0: wait)")
       ->check(CLI::Range(0.0, 86400.0));
+  cmd->add_flag("--hold", args->hold,
+                "after the log ends keep the ptys and the camera open until Ctrl-C / SIGTERM "
+                "(navd sees the sensors fall silent instead of vanishing)");
   cmd->add_flag("--json", args->json, "print the playback report as JSON on stdout");
   cmd->callback([args] { run_hil_play(*args); });
 }

@@ -233,6 +233,7 @@ PlayReport DivePlayer::play(const std::atomic<bool>& stop) {
     if (stop.load()) break;
     last_write_us = monotonic_now_us();
     report.max_late_s = std::max(report.max_late_s, (last_write_us - due_us) * 1e-6);
+    if (last_write_us - due_us > 10'000) ++report.late_writes;
     if (impl_->write_raw(*raw, report)) last_dive_us = raw->host_monotonic_us;
   }
   report.stopped = stop.load();

@@ -78,10 +78,11 @@ struct PlayReport {
   std::int64_t raw_unknown_sensor = 0;                ///< RAW_ messages of no sensor in the config
   std::int64_t dive_start_us = 0, host_start_us = 0;  ///< see PlayerOptions::on_start
   double dive_span_s = 0.0;                           ///< first to last played message, dive time
-  double wall_s = 0.0;      ///< from the clock's start to the last message
-  double max_late_s = 0.0;  ///< worst lateness of a write against its schedule
-  bool started = false;     ///< false: stopped or timed out while waiting for readers
-  bool stopped = false;     ///< `stop` ended it before the end of the log
+  double wall_s = 0.0;           ///< from the clock's start to the last message
+  double max_late_s = 0.0;       ///< worst lateness of a write against its schedule
+  std::int64_t late_writes = 0;  ///< writes more than 10 ms late
+  bool started = false;          ///< false: stopped or timed out while waiting for readers
+  bool stopped = false;          ///< `stop` ended it before the end of the log
 };
 
 class DivePlayer {
