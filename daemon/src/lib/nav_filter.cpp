@@ -244,8 +244,10 @@ void NavFilter::update_unary(const Model& model, const core::MeasVec& z, const c
                              const char* what, std::size_t sensor) {
   const int r = core::Esdf::kRobotBlock;
   core::MeasJac H;
-  model.predict(filter_.mean_block(r), &H);  // the linearisation the update below uses
+  const core::MeasVec h = model.predict(filter_.mean_block(r), &H);  // as the update below
+  const InnovationSample innovation = innovation_sample(model, z, h, H, P_robot_, R);
   const core::Status s = filter_.update(model, r, z, R);
+  innovations_.record(sensors_, sensor, what, time_us_, z, R, innovation, s.ok());
   if (s.ok()) {
     ++counters_.updates;
     if (!bounds_.update_robot(H, R).ok()) ++counters_.bound_update_failures;

@@ -137,6 +137,7 @@ void LinkPublisher::update_board(const daemon::NavFilter& filter) {
     v.num_camera_links = static_cast<int>(c.links_accepted);
     v.filter_status = c.update_failures > 0 ? 1 : 0;
     v.status_line = line;
+    v.innovations = filter.innovations().sensors();
     v.has_estimate = true;
   });
 }

@@ -75,14 +75,17 @@ void Publisher::publish_health(const SolutionView& view) {
   if (!good()) return;
   navlcm::health_t msg{};
   msg.utime = realtime_us();
-  if (sensors_ != nullptr) msg.sensors = sensors_->snapshot(monotonic_us());
-  msg.num_sensors = static_cast<std::int32_t>(msg.sensors.size());  // device threads only
+  if (sensors_ != nullptr) msg.sensors = sensors_->snapshot(monotonic_us());  // device threads
+  innovations_.fill(msg.sensors, view.innovations);  // and every sensor the filter used
+  msg.num_sensors = static_cast<std::int32_t>(msg.sensors.size());
   msg.queue_depth = static_cast<std::int32_t>(queue_.size());
   msg.queue_capacity = static_cast<std::int32_t>(queue_.capacity());
   msg.cg_relative_residual = view.cg_relative_residual;
   msg.cg_iterations = view.cg_iterations;
-  msg.cpu_percent = 0.0;
-  msg.rss_mb = 0.0;
+  const daemon::ProcessUsageMeter::Reading usage = usage_.update();
+  msg.cpu_percent = usage.cpu_percent;
+  msg.rss_mb = usage.rss_mb;
+  msg.peak_rss_mb = usage.peak_rss_mb;
   msg.status = view.status_line;
   if (lcm_->publish(config_.health.name, &msg) == 0) {
     ++counters_.health;

@@ -1,7 +1,8 @@
 #pragma once
 // The publisher thread: nav_solution_t and health_t (lcmtypes/) from the SolutionBoard on the
 // configured channels at the configured rates (config lcm.channels). Pose covariance is the
-// 6x6 [x y z roll pitch heading] block of the recovered robot covariance Σ_rr.
+// 6x6 [x y z roll pitch heading] block of the recovered robot covariance Σ_rr. health_t's CPU %
+// is over the interval since the previous health_t (process_usage.h), RSS and peak RSS as read.
 
 #include <atomic>
 #include <cstdint>
@@ -10,7 +11,9 @@
 
 #include "nav/daemon/config.h"
 #include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/process_usage.h"
 #include "nav/daemon/sources/sensor_health.h"
+#include "navd/health_innovations.h"
 #include "navd/solution_board.h"
 
 namespace lcm {
@@ -47,6 +50,8 @@ class Publisher {
   const daemon::MeasurementQueue& queue_;
   daemon::SensorHealthBoard* sensors_ = nullptr;
   std::unique_ptr<lcm::LCM> lcm_;
+  daemon::ProcessUsageMeter usage_;  ///< CPU % since the previous health_t
+  HealthInnovations innovations_;    ///< NIS means since the previous health_t
   PublisherCounters counters_;
 };
 

@@ -6,8 +6,10 @@
 #include <cstdint>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include "nav/core/geometry/types.h"
+#include "nav/daemon/filter/innovation_stats.h"
 
 namespace nav::navd {
 
@@ -22,6 +24,7 @@ struct SolutionView {
   double cg_relative_residual = 0.0;
   int cg_iterations = 0;
   std::string status_line = "initialising";
+  std::vector<daemon::SensorInnovation> innovations;  ///< NavFilter::innovations(), cumulative
   bool has_estimate = false;
 };
 

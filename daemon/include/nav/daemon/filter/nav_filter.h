@@ -63,6 +63,7 @@
 #include "nav/core/recovery/state_recovery.h"
 #include "nav/core/status.h"
 #include "nav/daemon/config.h"
+#include "nav/daemon/filter/innovation_stats.h"
 #include "nav/daemon/filter/sensor_models.h"
 #include "nav/daemon/measurement.h"
 #include "nav/daemon/registration_table.h"
@@ -157,6 +158,8 @@ class NavFilter {
   const core::StateRecovery& recovery() const { return recovery_; }
   const NavFilterOptions& options() const { return options_; }
   const NavFilterCounters& counters() const { return counters_; }
+  /// Per-sensor innovation records of the robot updates (innovation_stats.h; not checkpointed).
+  const SensorInnovationStats& innovations() const { return innovations_; }
   const std::vector<ImageRecord>& images() const { return images_; }
   const std::vector<LinkRecord>& links() const { return links_; }
   const std::vector<ProposalRecord>& proposals() const { return proposals_; }
@@ -226,6 +229,7 @@ class NavFilter {
   std::vector<ProposalRecord> proposals_;
   std::vector<Proposal> scratch_proposals_;
   NavFilterCounters counters_;
+  SensorInnovationStats innovations_;
 };
 
 }  // namespace nav::daemon

@@ -1,0 +1,156 @@
+// Innovation monitoring (nav/daemon/filter/innovation_stats.h) on simulated dives replayed
+// through navd's path (daemon::run_replay): with the simulator's errors as the config models
+// them (white noise at the config sigmas, no biases), each sensor's mean NIS is near its
+// measurement dimension (within the band stated below); a depth sensor ten times noisier than
+// its configured sigma (the config understates its error) shows a mean NIS far above its
+// dimension, the other sensors stay near theirs. Also the NIS arithmetic on a hand-checkable
+// 1-D case and the chi-square bounds of the mean NIS of an exact Kalman filter.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <random>
+
+#include "nav/core/models/unary_models.h"
+#include "nav/daemon/filter/innovation_stats.h"
+#include "nav/daemon/replay/replay.h"
+#include "support/sim_dive.h"
+
+namespace nav::sim::test {
+namespace {
+
+const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
+
+/// A short dive with white noise only (no biases, clock errors, dropouts), simulated once.
+const std::filesystem::path& clean_dive() {
+  static const std::filesystem::path dir = [] {
+    const auto d = scratch_dir("innovation");
+    SimOptions o;
+    o.out_dir = d.string();
+    o.seed = 3;
+    o.mission.images = 40;
+    o.sensor_errors = SensorErrorOptions::ideal();
+    (void)simulate_dive(o, sim_config_path().string());
+    return d;
+  }();
+  return dir;
+}
+
+struct SensorNis {
+  double mean = -1.0, dim = 0.0;
+  std::uint64_t updates = 0, rejected = 0;
+};
+
+std::map<std::string, SensorNis> replay_nis(const daemon::NavdConfig& config) {
+  daemon::ReplayOptions options;
+  options.dead_reckoning = false;
+  const daemon::ReplayRun run =
+      daemon::run_replay((clean_dive() / "dive.lcmlog").string(), config, options);
+  EXPECT_TRUE(run.error.empty()) << run.error;
+  std::map<std::string, SensorNis> out;
+  for (const daemon::SensorInnovation& s : run.slam->innovations().sensors()) {
+    const daemon::InnovationPeriod p = daemon::innovation_period(s, nullptr);
+    out[s.name] = {p.nis_mean, p.dim_mean, s.updates, s.rejected};
+    std::printf("%-10s updates %6llu rejected %llu mean NIS %.3f (dim %.2f)\n", s.name.c_str(),
+                static_cast<unsigned long long>(s.updates),
+                static_cast<unsigned long long>(s.rejected), p.nis_mean, p.dim_mean);
+  }
+  return out;
+}
+
+daemon::NavdConfig dive_config() {
+  return daemon::load_config_file((clean_dive() / "config.yaml").string());
+}
+
+TEST(SimInnovation, NisOfAOneDimensionalUpdateIsTheSquaredInnovationOverItsVariance) {
+  core::MeasVec z(1), h(1);
+  z << 0.3;
+  h << 0.1;  // heading: innovation 0.2 rad
+  core::MeasJac H = core::MeasJac::Zero(1, 12);
+  H(0, 5) = 1.0;
+  core::Mat12 P = core::Mat12::Identity() * 0.03;
+  core::MeasCov R(1, 1);
+  R << 0.01;
+  const daemon::InnovationSample s = daemon::innovation_sample(core::HeadingModel{}, z, h, H, P, R);
+  ASSERT_TRUE(s.valid);
+  EXPECT_NEAR(s.nu(0), 0.2, 1e-15);
+  EXPECT_NEAR(s.S(0, 0), 0.04, 1e-15);
+  EXPECT_NEAR(s.nis, 0.04 / 0.04, 1e-12);
+  // Angle rows are wrapped: 3.1 − (−3.1) is −0.083 rad, not 6.2.
+  z << 3.1;
+  h << -3.1;
+  const daemon::InnovationSample w = daemon::innovation_sample(core::HeadingModel{}, z, h, H, P, R);
+  EXPECT_NEAR(w.nu(0), 6.2 - 2.0 * M_PI, 1e-12);
+}
+
+TEST(SimInnovation, MeanNisOfAnExactKalmanFilterIsWithinTheChiSquareBounds) {
+  // A static 12-element state observed through heading (1-D) updates with the exact Kalman
+  // covariance: NIS ~ chi²(1) independently per update, so the mean of n = 4000 lies in
+  // 1 ± 3.29 sqrt(2 / n) (99.9 %).
+  std::mt19937 rng(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const double truth = 0.4, r = 0.01;
+  core::Mat12 P = core::Mat12::Identity();
+  double mean_estimate = 0.0;
+  core::MeasJac H = core::MeasJac::Zero(1, 12);
+  H(0, 5) = 1.0;
+  core::MeasCov R(1, 1);
+  R << r;
+  constexpr int kN = 4000;
+  double nis_sum = 0.0;
+  for (int k = 0; k < kN; ++k) {
+    core::MeasVec z(1), h(1);
+    z << truth + std::sqrt(r) * normal(rng);
+    h << mean_estimate;
+    const daemon::InnovationSample s =
+        daemon::innovation_sample(core::HeadingModel{}, z, h, H, P, R);
+    ASSERT_TRUE(s.valid);
+    nis_sum += s.nis;
+    const double gain = P(5, 5) / s.S(0, 0);
+    mean_estimate += gain * s.nu(0);
+    P(5, 5) *= 1.0 - gain;
+  }
+  const double mean = nis_sum / kN;
+  EXPECT_GT(mean, 1.0 - 3.29 * std::sqrt(2.0 / kN));
+  EXPECT_LT(mean, 1.0 + 3.29 * std::sqrt(2.0 / kN));
+}
+
+TEST(SimInnovation, ConsistentSensorsHaveAMeanNisNearTheirDimension) {
+  const std::map<std::string, SensorNis> nis = replay_nis(dive_config());
+  for (const char* name : {"dvl", "heading", "depth"}) {
+    ASSERT_TRUE(nis.count(name)) << name << " has no innovation record";
+    const SensorNis& s = nis.at(name);
+    ASSERT_GT(s.updates, 500u) << name;
+    EXPECT_EQ(s.rejected, 0u) << name;
+    // An exact filter would give dim · (1 ± a few %) (test above). NavFilter is not exact
+    // here: the constant-velocity process noise is larger than the simulated motion's (DVL
+    // NIS low), and the roll/pitch/heading sensor ("heading", dim 1.5 = 2 + 1 components) is
+    // over-confident. Measured (seed 3, 40 images): dvl 1.75 / 3, heading 3.57 / 1.5, depth
+    // 1.60 / 1. The band [0.3, 3] x dim catches a broken NIS (units, a missing R, angles not
+    // wrapped: 100s) while the filter's noise tuning is being reworked; the mis-modelled
+    // sensor of the next test is far outside it.
+    EXPECT_GT(s.mean, 0.3 * s.dim) << name;
+    EXPECT_LT(s.mean, 3.0 * s.dim) << name;
+  }
+}
+
+TEST(SimInnovation, SensorNoisierThanItsConfigShowsALargeMeanNis) {
+  daemon::NavdConfig config = dive_config();
+  bool found = false;
+  for (daemon::SensorConfig& s : config.sensors) {
+    if (s.name == "depth") {
+      s.noise.depth_m /= 10.0;  // the data keeps its sigma: 10x what the filter assumes
+      found = true;
+    }
+  }
+  ASSERT_TRUE(found) << "config/sim.yaml has no sensor 'depth'";
+  const std::map<std::string, SensorNis> nis = replay_nis(config);
+  ASSERT_TRUE(nis.count("depth"));
+  // Measured: depth 29.3 (1.6 with the right sigma); heading sensor unaffected (3.6).
+  EXPECT_GT(nis.at("depth").mean, 10.0 * nis.at("depth").dim);
+  EXPECT_LT(nis.at("heading").mean, 3.0 * nis.at("heading").dim);
+}
+
+}  // namespace
+}  // namespace nav::sim::test
