@@ -1,6 +1,7 @@
 // navd with a device sensor (live mode): an altimeter on a pseudo-terminal beside sim sensors
 // (which get none) gets a device thread; its bytes go out on RAW_ALTIMETER_DEV and its
-// health in health_t.sensors (LCM udpm with ttl=0; skipped where multicast does not loop back).
+// health in health_t.sensors (LCM udpm with ttl=0 in the test's own network namespace,
+// support/net_namespace.h; skipped with the reason where namespaces are not permitted).
 #include <gtest/gtest.h>
 #include <pty.h>
 #include <unistd.h>
@@ -15,13 +16,16 @@
 #include <navlcm/raw_bytes_t.hpp>
 #include <thread>
 
+#include "support/net_namespace.h"
 #include "support/udpm_probe.h"
 
 namespace nav::navd {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr const char* kUdpmUrl = "udpm://239.255.76.67:7671?ttl=0";
+constexpr const char* kUdpmUrl = nav::tool::test::kIsolatedUdpmUrl;
+// navd and this test in a network namespace of their own (before any thread starts).
+const nav::tool::test::NetNamespace& kNet = nav::tool::test::isolated_network();
 
 fs::path sim_yaml() {
   const fs::path rel = "config/sim.yaml";
@@ -45,10 +49,11 @@ struct Received {
 };
 
 TEST(NavdDevices, SerialSensorThreadPublishesRawBytesAndHealth) {
+  if (!kNet.ok) GTEST_SKIP() << kNet.reason;
   lcm::LCM lcm(kUdpmUrl);
   if (!lcm.good()) GTEST_SKIP() << "LCM cannot open " << kUdpmUrl << " here (no multicast)";
   if (!nav::tool::test::udpm_loops_back(lcm, "NAVD_DEVICES_TEST_PROBE")) {
-    GTEST_SKIP() << "udpm ttl=0 does not loop back on this host";
+    GTEST_SKIP() << "udpm ttl=0 does not loop back in the test's namespace";
   }
   int master = -1, slave = -1;
   char name[256] = {};

@@ -1,7 +1,8 @@
 // navd on the vehicle (live_mode.h): a heading/attitude sensor ($HEHDT + $PHTRO) and a
 // Paroscientific depth sensor on two pseudo-terminals, no `sim` sensor. The device threads must
 // feed the NavFilter (it initialises from attitude, heading and depth and publishes the robot
-// on NAVD_SOLUTION over LCM udpm with ttl=0, skipped where multicast does not loop back), and
+// on NAVD_SOLUTION over LCM udpm with ttl=0 in the test's own network namespace,
+// support/net_namespace.h, skipped with the reason where namespaces are not permitted), and
 // SIGTERM must stop navd within 1 s with exit status 0 and a JSON summary counting the
 // measurements the filter took.
 #include <gtest/gtest.h>
@@ -23,13 +24,16 @@
 #include <thread>
 #include <vector>
 
+#include "support/net_namespace.h"
 #include "support/udpm_probe.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-constexpr const char* kUdpmUrl = "udpm://239.255.76.67:7672?ttl=0";
+constexpr const char* kUdpmUrl = nav::tool::test::kIsolatedUdpmUrl;
+// navd and this test in a network namespace of their own (before any thread starts).
+const nav::tool::test::NetNamespace& kNet = nav::tool::test::isolated_network();
 constexpr double kHeadingDeg = 41.87;  // "$HEHDT,41.87,T*25"
 
 fs::path sim_yaml() {
@@ -145,11 +149,12 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
   PtySensor depth("*000129.3918\r\n", std::chrono::milliseconds(200));  // ~10 m of seawater
   ASSERT_TRUE(heading.ok() && depth.ok()) << "openpty failed";
   const fs::path config = write_live_config(dir, heading, depth);
-  lcm::LCM lcm(kUdpmUrl);
-  const bool udpm = lcm.good() && nav::tool::test::udpm_loops_back(lcm, "NAVD_LIVE_TEST_PROBE");
+  lcm::LCM lcm(kNet.ok ? kUdpmUrl : "memq://");
+  const bool udpm =
+      kNet.ok && lcm.good() && nav::tool::test::udpm_loops_back(lcm, "NAVD_LIVE_TEST_PROBE");
   Solutions got;
   if (udpm) lcm.subscribe("NAVD_SOLUTION", &Solutions::on, &got);
-  const pid_t pid = spawn_navd({"--config", config.string(), "--lcm-url", kUdpmUrl}, dir);
+  const pid_t pid = spawn_navd({"--config", config.string(), "--lcm-url", udpm ? kUdpmUrl : "memq://"}, dir);
   const auto until = Clock::now() + std::chrono::milliseconds(2500);
   while (Clock::now() < until) {
     if (udpm) lcm.handleTimeout(20); else std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -169,7 +174,11 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
   EXPECT_EQ(j["devices"].get<int>(), 2);
   EXPECT_GE(j["measurements"].get<int>(), 20) << out;  // ~2 s of 10 Hz HDT + PHTRO, 5 Hz depth
   EXPECT_EQ(j["images"].get<int>(), 0);
-  if (!udpm) GTEST_SKIP() << "udpm ttl=0 does not loop back on this host: LCM not checked";
+  if (!udpm) {
+    GTEST_SKIP() << (kNet.ok ? "udpm ttl=0 does not loop back in the test's namespace"
+                             : kNet.reason)
+                 << ": LCM not checked";
+  }
   ASSERT_GE(got.count, 5) << err;  // 10 Hz once initialised
   EXPECT_NEAR(got.last.rph_rad[2], kHeadingDeg * M_PI / 180.0, 0.01);
   EXPECT_NEAR(got.last.p_world_m[2], 10.0, 0.5);

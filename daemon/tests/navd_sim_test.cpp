@@ -3,8 +3,10 @@
 // replays it as fast as possible with --out (replay outputs, then the report); the second reuses
 // the dive and gives the same outputs. Also: the systemd notifications (READY, WATCHDOG,
 // STATUS, STOPPING) on a test-owned NOTIFY_SOCKET, a clean SIGTERM shutdown within 1 s with exit
-// status 0, and (where UDP multicast works) nav_solution_t / health_t over LCM udpm with ttl=0,
-// whose published pose covariance is symmetric positive semi-definite.
+// status 0, and nav_solution_t / health_t over LCM udpm with ttl=0 in the test's own network
+// namespace (support/net_namespace.h; skipped with the reason where namespaces are not
+// permitted): the published pose covariance is symmetric positive semi-definite, health_t
+// carries CPU, RSS and each sensor's innovation record.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/socket.h>
@@ -13,6 +15,7 @@
 #include <unistd.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -26,6 +29,7 @@
 #include <thread>
 #include <vector>
 
+#include "support/net_namespace.h"
 #include "support/udpm_probe.h"
 
 namespace {
@@ -33,7 +37,9 @@ namespace {
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
-constexpr const char* kUdpmUrl = "udpm://239.255.76.67:7667?ttl=0";
+constexpr const char* kUdpmUrl = nav::tool::test::kIsolatedUdpmUrl;
+// navd and this test in a network namespace of their own (before any thread starts).
+const nav::tool::test::NetNamespace& kNet = nav::tool::test::isolated_network();
 
 std::string slurp(const std::filesystem::path& path) {
   std::ifstream in(path);
@@ -259,27 +265,56 @@ TEST(NavdSim, SigtermStopsWithinOneSecondAndExitsZero) {
   EXPECT_LT(j["images"].get<int>(), 12);  // stopped before the end
 }
 
-TEST(NavdSim, PublishesSolutionAndHealthOverUdpm) {
-  lcm::LCM lcm(kUdpmUrl);
-  if (!lcm.good()) GTEST_SKIP() << "LCM cannot open " << kUdpmUrl << " here (no multicast)";
-  if (!nav::tool::test::udpm_loops_back(lcm, "NAVD_SIM_TEST_PROBE")) {
-    GTEST_SKIP() << "udpm ttl=0 does not loop back on this host";
+/// The last health_t of a replay: memory from /proc, and an innovation record for each sensor
+/// of config/sim.yaml that the filter updates from.
+void expect_health_usage_and_innovations(const navlcm::health_t& h) {
+  EXPECT_GT(h.rss_mb, 10.0);  // navd with the map: tens of MB
+  EXPECT_GE(h.peak_rss_mb, h.rss_mb);
+  EXPECT_GE(h.cpu_percent, 0.0);
+  for (const char* name : {"dvl", "heading", "depth"}) {
+    const auto it = std::find_if(h.sensors.begin(), h.sensors.end(),
+                                 [&](const navlcm::sensor_health_t& s) { return s.name == name; });
+    ASSERT_NE(it, h.sensors.end()) << "no health entry for sensor " << name;
+    EXPECT_GT(it->updates, 0) << name;
+    EXPECT_EQ(it->rejected_updates, 0) << name;
+    EXPECT_GT(it->nis_last, 0.0) << name;
+    // Over the last period (-1 and 0 when the replay ended right after the previous message).
+    if (it->nis_mean >= 0.0) {
+      EXPECT_GE(it->nis_expected, 1.0) << name;
+    }
+    ASSERT_GT(it->num_components, 0) << name;
+    ASSERT_EQ(it->num_components, static_cast<int>(it->last.size())) << name;
+    EXPECT_TRUE(it->last[0].fused) << name;
+    EXPECT_GT(it->last[0].innovation_variance, it->last[0].observation_variance) << name;
   }
+}
+
+TEST(NavdSim, PublishesSolutionAndHealthOverUdpm) {
+  if (!kNet.ok) GTEST_SKIP() << kNet.reason;
+  lcm::LCM lcm(kUdpmUrl);
+  ASSERT_TRUE(lcm.good()) << "LCM cannot open " << kUdpmUrl << " in the test's namespace";
+  ASSERT_TRUE(nav::tool::test::udpm_loops_back(lcm, "NAVD_SIM_TEST_PROBE"));
   int solutions = 0, health = 0;
   navlcm::nav_solution_t last{};
+  navlcm::health_t last_health{};
+  double max_cpu_percent = 0.0;
   struct Handler {
     int* solutions;
     int* health;
     navlcm::nav_solution_t* last;
+    navlcm::health_t* last_health;
+    double* max_cpu_percent;
     void on_solution(const lcm::ReceiveBuffer*, const std::string&,
                      const navlcm::nav_solution_t* m) {
       ++*solutions;
       *last = *m;
     }
-    void on_health(const lcm::ReceiveBuffer*, const std::string&, const navlcm::health_t*) {
+    void on_health(const lcm::ReceiveBuffer*, const std::string&, const navlcm::health_t* m) {
       ++*health;
+      *last_health = *m;
+      *max_cpu_percent = std::max(*max_cpu_percent, m->cpu_percent);
     }
-  } handler{&solutions, &health, &last};
+  } handler{&solutions, &health, &last, &last_health, &max_cpu_percent};
   lcm.subscribe("NAVD_SOLUTION", &Handler::on_solution, &handler);
   lcm.subscribe("NAVD_HEALTH", &Handler::on_health, &handler);
   const SimDir sim(12);
@@ -300,6 +335,8 @@ TEST(NavdSim, PublishesSolutionAndHealthOverUdpm) {
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(cov);
   EXPECT_GT(eig.eigenvalues().minCoeff(), 0.0) << cov;  // the recovered Σ_rr of the last image
   EXPECT_GT(cov(0, 0), 0.0);
+  EXPECT_GT(max_cpu_percent, 0.0);  // replaying: the filter thread works
+  expect_health_usage_and_innovations(last_health);
 }
 
 }  // namespace
