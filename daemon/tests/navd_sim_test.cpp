@@ -52,13 +52,16 @@ std::string slurp(const std::filesystem::path& path) {
 class NavdProcess {
  public:
   using Env = std::vector<std::pair<std::string, std::string>>;
-  explicit NavdProcess(const std::vector<std::string>& args, const Env& env = {}) {
+  /// `no_network`: navd runs in a network namespace of its own without any route.
+  explicit NavdProcess(const std::vector<std::string>& args, const Env& env = {},
+                       bool no_network = false) {
     dir_ = std::filesystem::temp_directory_path() /
            ("navd_sim_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++));
     std::filesystem::create_directories(dir_);
     pid_ = ::fork();
     if (pid_ == 0) {
       for (const auto& [name, value] : env) ::setenv(name.c_str(), value.c_str(), 1);
+      if (no_network && !nav::tool::test::enter_network_without_multicast().ok) ::_exit(125);
       exec_child(args);
     }
   }
@@ -126,6 +129,17 @@ class SimDir {
   std::filesystem::path config() const { return dir_ / "sim.yaml"; }
   std::filesystem::path dive() const { return dir_ / "dive"; }
   std::filesystem::path out(const std::string& name) const { return dir_ / name; }
+  std::filesystem::path checkpoints() const { return dir_ / "checkpoints"; }
+  /// Checkpoints in checkpoints() every `period_s` of wall time.
+  void set_checkpoints(double period_s) const {
+    std::string yaml = slurp(config());
+    const std::string path = "path: /tmp/navd-sim/checkpoints", period = "period_s: 30";
+    ASSERT_NE(yaml.find(path), std::string::npos) << "config/sim.yaml checkpoint.path changed";
+    yaml.replace(yaml.find(path), path.size(), "path: " + checkpoints().string());
+    ASSERT_NE(yaml.find(period), std::string::npos) << "config/sim.yaml checkpoint.period_s";
+    yaml.replace(yaml.find(period), period.size(), "period_s: " + std::to_string(period_s));
+    std::ofstream(config()) << yaml;
+  }
 
  private:
   static inline int counter_ = 0;
@@ -319,7 +333,7 @@ TEST(NavdSim, PublishesSolutionAndHealthOverUdpm) {
   lcm.subscribe("NAVD_HEALTH", &Handler::on_health, &handler);
   const SimDir sim(12);
   NavdProcess navd(
-      {"--config", sim.config().string(), "--speed", "50", "--lcm-url", kUdpmUrl});
+      {"--config", sim.config().string(), "--speed", "50"});  // config/sim.yaml's udpm URL
   const auto deadline = Clock::now() + std::chrono::seconds(20);
   while (Clock::now() < deadline && navd.wait_exit(std::chrono::milliseconds(1)) == -1) {
     lcm.handleTimeout(20);
@@ -337,6 +351,58 @@ TEST(NavdSim, PublishesSolutionAndHealthOverUdpm) {
   EXPECT_GT(cov(0, 0), 0.0);
   EXPECT_GT(max_cpu_percent, 0.0);  // replaying: the filter thread works
   expect_health_usage_and_innovations(last_health);
+}
+
+TEST(NavdSim, WithoutAMulticastRouteTheConfigsUdpmFallsBackToMemqWithTheFix) {
+  if (!kNet.ok) GTEST_SKIP() << kNet.reason;  // namespaces: the same permission
+  const SimDir sim(3);
+  NavdProcess navd({"--config", sim.config().string(), "--as-fast-as-possible"}, {}, true);
+  ASSERT_EQ(navd.wait_exit(std::chrono::seconds(60)), 0) << navd.err();
+  const std::string err = navd.err();
+  EXPECT_NE(err.find("cannot open LCM at 'udpm://239.255.76.67:7667?ttl=0'"), std::string::npos)
+      << err;
+  EXPECT_NE(err.find("ip route add 224.0.0.0/4 dev lo"), std::string::npos) << err;
+  EXPECT_NE(err.find("publishing in-process only (memq://)"), std::string::npos) << err;
+  EXPECT_EQ(json::parse(navd.out())["images"].get<int>(), 3);  // the dive ran all the same
+}
+
+TEST(NavdSim, LcmUrlOptionThatCannotBeOpenedStopsWithTheFix) {
+  if (!kNet.ok) GTEST_SKIP() << kNet.reason;
+  const SimDir sim(3);
+  NavdProcess navd({"--config", sim.config().string(), "--lcm-url", kUdpmUrl}, {}, true);
+  EXPECT_EQ(navd.wait_exit(std::chrono::seconds(20)), 2) << navd.err();
+  EXPECT_NE(navd.err().find("ip route add 224.0.0.0/4 dev lo"), std::string::npos) << navd.err();
+  EXPECT_TRUE(navd.out().empty()) << navd.out();
+}
+
+TEST(NavdSim, CheckpointsAreWrittenAndResumedWithCheckpointsLikeReplay) {
+  const SimDir sim(8);
+  sim.set_checkpoints(0.2);
+  {  // paced (~3 s of dive at 20x), stopped by SIGTERM once a checkpoint is there
+    NavdProcess first({"--config", sim.config().string(), "--speed", "20", "--checkpoints"});
+    const auto deadline = Clock::now() + std::chrono::seconds(30);
+    while (Clock::now() < deadline && !(std::filesystem::exists(sim.checkpoints()) &&
+                                        !std::filesystem::is_empty(sim.checkpoints()))) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    ASSERT_EQ(::kill(first.pid(), SIGTERM), 0);
+    ASSERT_EQ(first.wait_exit(std::chrono::seconds(5)), 0) << first.err();
+    EXPECT_LT(json::parse(first.out())["images"].get<int>(), 8) << "ended before the SIGTERM";
+  }
+  NavdProcess second({"--config", sim.config().string(), "--as-fast-as-possible", "--checkpoints"});
+  ASSERT_EQ(second.wait_exit(std::chrono::seconds(60)), 0) << second.err();
+  EXPECT_NE(second.err().find("navd: resumed from " + sim.checkpoints().string()),
+            std::string::npos)
+      << second.err();
+  EXPECT_EQ(json::parse(second.out())["images"].get<int>(), 8);
+  // The same dive directory simulated again with other options is another input: its
+  // checkpoints are not resumed.
+  NavdProcess other({"--config", sim.config().string(), "--images", "9", "--as-fast-as-possible",
+                     "--checkpoints"});
+  ASSERT_EQ(other.wait_exit(std::chrono::seconds(60)), 0) << other.err();
+  EXPECT_EQ(other.err().find("resumed from"), std::string::npos) << other.err();
+  EXPECT_NE(other.err().find("checkpoint of another input"), std::string::npos) << other.err();
+  EXPECT_EQ(json::parse(other.out())["images"].get<int>(), 9);
 }
 
 }  // namespace

@@ -64,10 +64,12 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
   }
   Checkpointing ckpt;
   if (options.checkpoints) {
+    const std::string& identity =
+        options.checkpoint_identity.empty() ? log_path : options.checkpoint_identity;
     ResumedNavFilter resumed = resume_nav_filter(
         config.checkpoint.path,
         [&] { return std::make_unique<NavFilter>(config, run.registrations.get(), filter_options); },
-        log_path);
+        identity);
     for (const SkippedCheckpoint& k : resumed.skipped) {
       spdlog::warn("navd: checkpoint {} skipped: {}", k.path.string(), k.reason);
     }
@@ -80,7 +82,7 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
                    resumed.point.applied);
     }
     ckpt.checkpointer =
-        std::make_unique<NavFilterCheckpointer>(config.checkpoint, resumed.point, log_path);
+        std::make_unique<NavFilterCheckpointer>(config.checkpoint, resumed.point, identity);
   }
   TimeOrderingOptions ordering_options;
   ordering_options.latency_window_us =

@@ -5,8 +5,9 @@
 //   navd --config C --replay DIVE.lcmlog [--speed X | --as-fast-as-possible] [--out DIR]
 //        [--checkpoints]: the dive log is the source (replay_mode.h)
 //   navd --config config/sim.yaml [--images N] [--seed S] [--speed X | --as-fast-as-possible]
-//        [--out DIR]: the default mode: the config's `sim` dive, simulated when missing
-//        (sim_dive.h), replayed as with --replay; with --out also the report
+//        [--out DIR] [--checkpoints]: the default mode: the config's `sim` dive, simulated when
+//        missing (sim_dive.h), replayed as with --replay; with --out also the report. LCM falls
+//        back to memq:// with a warning when the config's udpm cannot be opened (lcm_url.h)
 // SIGTERM/SIGINT stop every mode within a second (STOPPING=1), exit 0.
 // Exit status: 0 done or stopped, 1 the filter, simulation or report failed, 2 bad arguments or
 // configuration.
@@ -21,6 +22,7 @@
 
 #include "nav/daemon/config.h"
 #include "nav/daemon/sd_notify.h"
+#include "navd/lcm_url.h"
 #include "navd/live_mode.h"
 #include "navd/replay_mode.h"
 #include "navd/sim_dive.h"
@@ -39,7 +41,7 @@ struct Args {
   double duration_s = 0.0;   ///< live mode: 0 until a signal
   std::string replay;        ///< a dive log to replay
   std::string out_dir;       ///< replay output directory (replay and default modes)
-  bool checkpoints = false;  ///< --replay or live: resume from / write checkpoints
+  bool checkpoints = false;  ///< every mode: resume from / write checkpoints
 };
 
 void add_options(CLI::App& app, Args& args) {
@@ -59,8 +61,9 @@ void add_options(CLI::App& app, Args& args) {
                  "replay and default modes: write the replay output directory (default mode: "
                  "and the report)");
   app.add_flag("--checkpoints", args.checkpoints,
-               "with --replay or on devices: resume from the newest valid checkpoint of this "
-               "input in checkpoint.path and write checkpoints there (period_s, at the end)");
+               "every mode: resume from the newest valid checkpoint of this input (the replayed "
+               "log, the simulated dive, or 'live') in checkpoint.path and write checkpoints "
+               "there (period_s, at the end)");
   app.add_option("--duration-s", args.duration_s,
                  "live mode: stop after this many seconds (0: no limit)")
       ->check(CLI::NonNegativeNumber);
@@ -76,16 +79,24 @@ sigset_t block_stop_signals() {
   return set;
 }
 
-int run_default_mode(const daemon::NavdConfig& config, const Args& args,
-                     const sigset_t& signals, const daemon::SdNotifier& notifier) {
+int run_default_mode(daemon::NavdConfig config, const Args& args, const sigset_t& signals,
+                     const daemon::SdNotifier& notifier) {
+  // udpm (config/sim.yaml) on a host without a multicast route: memq with a warning, unless the
+  // URL was asked for with --lcm-url (lcm_url.h).
+  config.lcm.url = navd::usable_lcm_url(config.lcm.url, args.lcm_url.empty());
   daemon::SimDiveConfig sim = *config.sim;
   if (args.images) sim.images = *args.images;
   if (args.seed) sim.seed = static_cast<int>(*args.seed);
   const std::optional<std::string> log =
       navd::ensure_sim_dive(sim, args.config_path, signals, notifier);
   if (!log) return 0;  // stopped during the simulation
-  const navd::ReplayModeArgs replay{*log,     args.config_path, args.speed, args.as_fast_as_possible,
-                                    args.out_dir, args.checkpoints, true};
+  const navd::ReplayModeArgs replay{
+      *log,         args.config_path, args.speed, args.as_fast_as_possible,
+      args.out_dir, args.checkpoints, true,       navd::sim_dive_identity(sim)};
+  if (args.checkpoints) {
+    spdlog::info("navd: checkpoints in {} (input '{}')", config.checkpoint.path,
+                 replay.checkpoint_identity);
+  }
   return navd::run_replay_mode(config, replay, signals, notifier);
 }
 
@@ -94,9 +105,9 @@ int run(const Args& args, const sigset_t& signals) {
   if (!args.lcm_url.empty()) config.lcm.url = args.lcm_url;
   const daemon::SdNotifier notifier;
   if (!args.replay.empty()) {
-    const navd::ReplayModeArgs replay{args.replay, args.config_path, args.speed,
-                                      args.as_fast_as_possible, args.out_dir,
-                                      args.checkpoints};
+    const navd::ReplayModeArgs replay{
+        args.replay,  args.config_path, args.speed, args.as_fast_as_possible,
+        args.out_dir, args.checkpoints, false,      ""};
     return navd::run_replay_mode(config, replay, signals, notifier);
   }
   if (navd::has_device_sensors(config)) {

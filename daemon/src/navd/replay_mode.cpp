@@ -67,6 +67,7 @@ int run_replay_mode(const daemon::NavdConfig& config, const ReplayModeArgs& args
   options.queue = &queue;
   options.stop = &stop;
   options.checkpoints = args.checkpoints;
+  options.checkpoint_identity = args.checkpoint_identity;
   options.after_measurement = [&](const daemon::NavFilter& filter) {
     map_publisher.on_measurement(filter);
     const auto period = notifier.watchdog_period();

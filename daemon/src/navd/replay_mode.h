@@ -22,6 +22,7 @@ struct ReplayModeArgs {
   std::string out_dir;
   bool checkpoints = false;  ///< --checkpoints: resume from / write checkpoint.path
   bool report = false;       ///< with out_dir: also run the report (report/report.h) there
+  std::string checkpoint_identity;  ///< "": the log path (ReplayOptions::checkpoint_identity)
 };
 
 int run_replay_mode(const daemon::NavdConfig& config, const ReplayModeArgs& args,

@@ -90,6 +90,12 @@ bool simulate(const daemon::SimDiveConfig& sim, const std::string& config_path,
 
 }  // namespace
 
+std::string sim_dive_identity(const daemon::SimDiveConfig& sim) {
+  return "sim " + fs::absolute(sim.dive_dir).lexically_normal().string() + " seed " +
+         std::to_string(sim.seed) + " images " + std::to_string(sim.images) + " outlier_rate " +
+         nlohmann::json(sim.outlier_rate).dump();
+}
+
 std::optional<std::string> ensure_sim_dive(const daemon::SimDiveConfig& sim,
                                            const std::string& config_path,
                                            const sigset_t& stop_signals,

@@ -23,4 +23,8 @@ std::optional<std::string> ensure_sim_dive(const daemon::SimDiveConfig& sim,
                                            const sigset_t& stop_signals,
                                            const daemon::SdNotifier& notifier);
 
+/// The checkpoint input identity of the default mode's dive: "sim <absolute dive_dir> seed S
+/// images N outlier_rate R" (a dive simulated again with other options is another input).
+std::string sim_dive_identity(const daemon::SimDiveConfig& sim);
+
 }  // namespace nav::navd

@@ -116,6 +116,15 @@ inline NetNamespace enter_isolated_network() {
   return ns;
 }
 
+/// Moves this process into a new network namespace with `lo` down and no route at all: LCM
+/// udpm cannot be opened there (tests of that failure; call in a forked child).
+inline NetNamespace enter_network_without_multicast() {
+  NetNamespace ns;
+  if (!detail::unshare_network(&ns.reason)) return ns;
+  ns.ok = true;
+  return ns;
+}
+
 /// The process's isolated network, entered at the first call (before any thread starts).
 inline const NetNamespace& isolated_network() {
   static const NetNamespace ns = enter_isolated_network();

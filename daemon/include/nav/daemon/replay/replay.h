@@ -49,6 +49,10 @@ struct ReplayOptions {
   /// measurements it holds (filter/nav_filter_checkpointer.h). The dead-reckoning twin is not
   /// checkpointed: it is fed every measurement, skipped or not.
   bool checkpoints = false;
+  /// Input identity written into and required of the checkpoints ("": the log path). navd's
+  /// default mode names the simulated dive and its options, so that a dive simulated again at
+  /// the same path never resumes a checkpoint of the previous one.
+  std::string checkpoint_identity;
 };
 
 struct ReplayRun {
