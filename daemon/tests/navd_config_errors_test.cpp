@@ -98,8 +98,9 @@ TEST_F(NavdConfigErrors, WrongType) {
   expect_config_error(
       edited("type.yaml", "cg_iterations_per_step: 5", "cg_iterations_per_step: 2.5"),
       "filter.cg_iterations_per_step", "expected an integer, got '2.5'");
-  expect_config_error(edited("type_seq.yaml", "url: \"memq://\"", "url: [memq]"), "lcm.url",
-                      "expected a string, got a sequence");
+  expect_config_error(
+      edited("type_seq.yaml", "url: \"udpm://239.255.76.67:7667?ttl=0\"", "url: [memq]"), "lcm.url",
+      "expected a string, got a sequence");
 }
 
 TEST_F(NavdConfigErrors, OutOfRange) {

@@ -81,7 +81,9 @@ TEST(ProcessUsage, SelfReadingSeesTouchedMemoryAndAPeakAtLeastTheCurrentRss) {
   block.shrink_to_fit();
   const std::optional<ProcessUsageSample> after = read_process_usage();
   ASSERT_TRUE(after.has_value());
-  EXPECT_GE(after->peak_rss_mb, during->rss_mb);  // the high-water mark stays
+  // The high-water mark keeps the block (the kernel's RSS counters are batched per thread, so
+  // compare with a margin rather than with `during` exactly).
+  EXPECT_GE(after->peak_rss_mb - before->rss_mb, 60.0);
 }
 
 TEST(ProcessUsage, MeterGivesNoCpuOnTheFirstReadingThenAPositiveOne) {
