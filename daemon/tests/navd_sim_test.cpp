@@ -17,6 +17,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -282,6 +283,14 @@ TEST(NavdSim, SigtermStopsWithinOneSecondAndExitsZero) {
 /// The last health_t of a replay: memory from /proc, and an innovation record for each sensor
 /// of config/sim.yaml that the filter updates from.
 void expect_health_usage_and_innovations(const navlcm::health_t& h) {
+  std::printf("last health_t: cpu %.1f %%, rss %.1f MiB, peak %.1f MiB\n", h.cpu_percent,
+              h.rss_mb, h.peak_rss_mb);
+  for (const navlcm::sensor_health_t& s : h.sensors) {
+    std::printf("  %-10s updates %lld rejected %lld NIS mean %.3f (expected %.2f) last %.3f\n",
+                s.name.c_str(), static_cast<long long>(s.updates),
+                static_cast<long long>(s.rejected_updates), s.nis_mean, s.nis_expected,
+                s.nis_last);
+  }
   EXPECT_GT(h.rss_mb, 10.0);  // navd with the map: tens of MB
   EXPECT_GE(h.peak_rss_mb, h.rss_mb);
   EXPECT_GE(h.cpu_percent, 0.0);
