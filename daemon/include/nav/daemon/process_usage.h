@@ -2,9 +2,11 @@
 // Process CPU and memory for navd's health_t (issue 5: "health (... CPU, memory)"), read from
 // procfs (proc(5)): utime + stime of /proc/<pid>/stat (fields 14 and 15, clock ticks) and
 // VmRSS / VmHWM of /proc/<pid>/status (kB). CPU % is the process CPU time over the wall interval
-// between two samples, 100 = one core fully busy (2 busy threads: 200).
+// between two samples, 100 = one core fully busy (2 busy threads: 200); resolution one clock tick
+// (10 ms at USER_HZ 100) per interval, i.e. 1 % over navd's 1 s health period.
 // Parsing is separate from reading so it is tested on fixed text. Not thread-safe (one owner,
-// the publisher thread); a sample reads two small files (no allocation beyond the line buffer).
+// the publisher thread); a sample reads two small files into strings (the publisher thread
+// allocates, the filter thread never calls this).
 
 #include <cstdint>
 #include <optional>
