@@ -10,6 +10,10 @@
 
 namespace nav::navd {
 
+/// "cannot open LCM at 'URL'" and, for udpm, the likely cause and the fix (the replay and live
+/// modes log it and run without publishing).
+std::string lcm_open_error(const std::string& url);
+
 /// True if LCM can be opened at `url` (it is closed again).
 bool lcm_url_opens(const std::string& url);
 

@@ -17,6 +17,7 @@
 #include "nav/daemon/sources/device_sources.h"
 #include "nav/daemon/time_ordering.h"
 #include "navd/device_sources.h"
+#include "navd/lcm_url.h"
 #include "navd/link_publisher.h"
 #include "navd/solution_board.h"
 #include "navd/publisher.h"
@@ -129,7 +130,7 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
   daemon::MeasurementQueue queue(kQueueCapacity);
   SolutionBoard board;
   Publisher publisher(config.lcm, board, queue);
-  if (!publisher.good()) spdlog::error("navd: cannot open LCM at '{}'", config.lcm.url);
+  if (!publisher.good()) spdlog::error("navd: {}", lcm_open_error(config.lcm.url));
   LinkPublisher links(config.lcm, board);
   NavdDevices devices(config, queue);
   devices.attach(publisher);

@@ -10,6 +10,7 @@
 
 #include "nav/daemon/measurement_queue.h"
 #include "nav/daemon/replay/replay.h"
+#include "navd/lcm_url.h"
 #include "navd/link_publisher.h"
 #include "navd/solution_board.h"
 #include "navd/publisher.h"
@@ -56,7 +57,7 @@ int run_replay_mode(const daemon::NavdConfig& config, const ReplayModeArgs& args
   daemon::MeasurementQueue queue(kQueueCapacity);
   SolutionBoard board;
   Publisher publisher(config.lcm, board, queue);
-  if (!publisher.good()) spdlog::error("navd: cannot open LCM at '{}'", config.lcm.url);
+  if (!publisher.good()) spdlog::error("navd: {}", lcm_open_error(config.lcm.url));
   LinkPublisher map_publisher(config.lcm, board);
 
   std::atomic<bool> stop{false}, filter_done{false};
