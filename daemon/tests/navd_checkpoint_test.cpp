@@ -13,6 +13,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <random>
 #include <string>
 #include <thread>
@@ -49,6 +50,23 @@ void wait_for_text(const fs::path& file, const std::string& text,
     if (fs::exists(file) && read_text(file).find(text) != std::string::npos) return;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
+}
+
+/// Waits until process `pid` blocks SIGTERM (navd's main does that first: from then on a SIGTERM
+/// is a clean stop, before it the default action kills it), at most `timeout`.
+bool wait_sigterm_blocked(pid_t pid, std::chrono::seconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+    for (std::string line; std::getline(status, line);) {
+      if (line.rfind("SigBlk:", 0) == 0 &&
+          (std::stoull(line.substr(7), nullptr, 16) >> (SIGTERM - 1)) & 1u) {
+        return true;
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return false;
 }
 
 TEST(NavdCheckpoints, KilledReplayResumesToTheUninterruptedMap) {
@@ -136,6 +154,12 @@ TEST(NavdCheckpoints, SigtermWritesTheShutdownCheckpoint) {
                               dive + "/dive.lcmlog' --speed 50 --checkpoints > /dev/null 2>> '" +
                               (root / "err.txt").string() + "'";
   const pid_t pid = start_shell(command);
+  // Under load navd may take longer than the sleep to reach main (exec, dynamic linking).
+  if (!wait_sigterm_blocked(pid, std::chrono::seconds(20))) {
+    ::kill(pid, SIGKILL);
+    (void)wait_status(pid);
+    FAIL() << "navd did not block SIGTERM within 20 s: " << read_text(root / "err.txt");
+  }
   std::this_thread::sleep_for(std::chrono::milliseconds(800));
   ::kill(pid, SIGTERM);
   EXPECT_EQ(wait_status(pid), 0) << read_text(root / "err.txt");
