@@ -4,7 +4,9 @@
 // The seed-averaged 6-dof NEES must lie in the two-sided 95 % chi-square interval of
 // kSeeds x 6 dof divided by kSeeds; each component's averaged NEES in that of kSeeds x 1 dof.
 // The dives run through the replay library in-process: dive-log source, sensor decoders, time
-// ordering, NavFilter, exactly as `navtool replay`.
+// ordering, NavFilter, exactly as `navtool replay`, with config/sim.yaml as shipped (its process
+// noise, nothing tuned here) and the simulator's default errors, DVL dropouts included. The
+// full-size survey (866 images x 20 seeds) is `hil-tests/nees-seeds` (hil-tests/README.md).
 #include <gtest/gtest.h>
 
 #include <array>
@@ -54,11 +56,8 @@ PoseNees newest_state_nees(std::uint64_t seed, const SensorErrorOptions& errors)
   o.mission.images = kImages;
   o.sensor_errors = errors;
   simulate_dive(o, sim_config_path().string());
-  daemon::NavdConfig cfg = daemon::load_config_file((dir / "config.yaml").string());
-  // Process noise sized for the simulated vehicle (config/README.md "filter"): heave over the
-  // wreck and the roll/pitch oscillation; sim.yaml's 1e-3 / 1e-5 give z and roll NEES 7 and 5.
-  cfg.filter.process_noise.accel_psd = core::Vec3(1e-3, 1e-3, 3e-1);
-  cfg.filter.process_noise.angular_accel_psd = core::Vec3::Constant(1e-4);
+  // The dive's config.yaml is config/sim.yaml as shipped (simulate_dive copies it).
+  const daemon::NavdConfig cfg = daemon::load_config_file((dir / "config.yaml").string());
   daemon::ReplayOptions ro;
   ro.dead_reckoning = false;
   daemon::ReplayRun run = daemon::run_replay((dir / "dive.lcmlog").string(), cfg, ro);
@@ -79,7 +78,8 @@ PoseNees newest_state_nees(std::uint64_t seed, const SensorErrorOptions& errors)
   for (int i = 0; i < 6; ++i) e[i] = newest->mean[i] - truth[static_cast<std::size_t>(2 + i)];
   for (int i = 3; i < 6; ++i) e[i] = core::wrap_angle(e[i]);
   r.nees6 = e.dot(newest->exact.ldlt().solve(e));
-  for (int i = 0; i < 6; ++i) r.component[static_cast<std::size_t>(i)] = e[i] * e[i] / newest->exact(i, i);
+  for (int i = 0; i < 6; ++i)
+    r.component[static_cast<std::size_t>(i)] = e[i] * e[i] / newest->exact(i, i);
   const daemon::NavFilterCounters& c = run.slam->counters();
   r.links_gated = c.links_gated;
   r.links_tested = c.links_accepted + c.links_gated;
@@ -124,27 +124,35 @@ MonteCarlo monte_carlo(const SensorErrorOptions& errors) {
   return m;
 }
 
-/// The default sensor errors without DVL bottom-lock losses. A 30-image dive (235 s) gets at
-/// least one 10-40 s loss (sensor_streams.h), often in a turn: dead reckoning is then metres
-/// off (consistently, its sigma grows with it), and the first camera links after it are
-/// linearised that far from the truth; the 5-dof bearing-only link model is not linear over
-/// metres at 1-4 m baselines, and the filter ends up overconfident (README: measured). That is
-/// a filter limit (no relinearisation of links), kept out of this check.
+/// The default sensor errors without DVL bottom-lock losses.
 SensorErrorOptions without_dropouts(SensorErrorOptions e) {
   e.dvl_dropouts_per_hour = 0.0;
   return e;
 }
 
+// The default survey's errors, DVL dropouts included: a 30-image dive (235 s) gets at least one
+// 10-40 s loss (sensor_streams.h), far more than the 1.5 per hour of the full survey.
 TEST(SimNees, NewestDelayedStateIsConsistentOverTwentySeeds) {
-  const MonteCarlo m = monte_carlo(without_dropouts(SensorErrorOptions{}));
+  const MonteCarlo m = monte_carlo(SensorErrorOptions{});
   const auto [lo6, hi6] = mean_chi2_interval(6, kSeeds, 0.95);
   EXPECT_GE(m.nees6, lo6);
   EXPECT_LE(m.nees6, hi6);
   const double hi1 = mean_chi2_interval(1, kSeeds, 0.95).second;
-  // Per component only the upper end (not overconfident): x is conservative (README).
+  // Per component only the upper end (not overconfident).
   for (std::size_t i = 0; i < 6; ++i) EXPECT_LE(m.component[i], hi1) << kComponents[i];
   EXPECT_EQ(m.outliers_accepted, 0u);
   EXPECT_GT(m.outliers_rejected, 0u);
+  // After a loss in a turn the first camera links are linearised decimetres to metres from the
+  // truth (5-dof bearing-only model, no relinearisation of links) and some good ones are gated
+  // (measured 8 %, README); bounded here, the 2 % target is checked with bottom lock below.
+  EXPECT_LE(m.good_gated_fraction(), 0.12);
+}
+
+// With bottom lock throughout, the 99 % gate rejects about 1 % of the good links.
+TEST(SimNees, WithBottomLockFewGoodLinksAreGated) {
+  const MonteCarlo m = monte_carlo(without_dropouts(SensorErrorOptions{}));
+  EXPECT_LE(m.nees6, mean_chi2_interval(6, kSeeds, 0.95).second);
+  EXPECT_EQ(m.outliers_accepted, 0u);
   EXPECT_LE(m.good_gated_fraction(), 0.02) << "gate at 99 %: ~1 % of good links expected";
 }
 

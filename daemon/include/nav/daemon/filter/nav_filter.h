@@ -14,12 +14,16 @@
 //   and every held measurement is processed. More than 1024 held measurements are dropped and
 //   counted (`before_initialisation`).
 // * Predict: constant-velocity model (filter.process_noise_psd) to each measurement's time, in
-//   steps of at most max_predict_step_s. A measurement less than min_predict_step_s (50 ms) after
+//   steps of at most max_predict_step_s. A measurement less than min_predict_step_s (5 ms) after
 //   the filter's time is applied at the filter's time instead: the process noise of a
 //   millisecond prediction has a pose block ~dt³ (1e-14 for a 2 ms step), whose inverse makes
 //   the information form lose every digit at depths of kilometres (measured: a 6 m jump of the
-//   estimate at 3,800 m). Sensors sampled together (HDT, PHTRO and the DVL within 5 ms) share
-//   one prediction; the time error is below the grouping gap. Updates: DVL, roll/pitch, heading, depth with the
+//   estimate at 3,800 m). Sensors sampled together (HDT, PHTRO, within the 2 ms jitter) share
+//   one prediction; the time error is below the grouping gap. The gap must stay well below the
+//   sensor periods: at 50 ms, measurements (and images) of one tick were applied at the time of
+//   another sensor's sample up to 50 ms earlier (the DVL's), which lagged the heading ~20 ms in
+//   the 10 deg/s turns (0.2 deg at 0.025 deg sigma) and made the default dive's heading NEES 3.5
+//   (hil-tests/README.md "Consistency"). Updates: DVL, roll/pitch, heading, depth with the
 //   config mounts and noise (sensor_models.h). Altitude sets the camera footprint size (no
 //   seabed model); angular rates are counted and not used.
 // * Every robot update is applied to the robot bound as well (a Kalman update of B_rr, still an
@@ -78,7 +82,7 @@ struct NavFilterOptions {
   double max_predict_step_s = 0.5;         ///< longer gaps are predicted in steps, > 0
   /// A measurement less than this after the filter's time is applied at that time (no
   /// prediction); in [0, max_predict_step_s). See the file comment.
-  double min_predict_step_s = 0.05;
+  double min_predict_step_s = 0.005;
   double default_altitude_m = 3.0;         ///< footprint altitude before any altitude, > 0
   double proposal_confidence = 0.99;       ///< of the proposal ellipse, in (0, 1)
   double camera_gate_chi2 = 15.086;        ///< 5-dof gate (from_config derives it)
