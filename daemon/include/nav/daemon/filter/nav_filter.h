@@ -20,10 +20,10 @@
 //   the information form lose every digit at depths of kilometres (measured: a 6 m jump of the
 //   estimate at 3,800 m). Sensors sampled together (HDT, PHTRO, within the 2 ms jitter) share
 //   one prediction; the time error is below the grouping gap. The gap must stay well below the
-//   sensor periods: at 50 ms, measurements (and images) of one tick were applied at the time of
-//   another sensor's sample up to 50 ms earlier (the DVL's), which lagged the heading ~20 ms in
-//   the 10 deg/s turns (0.2 deg at 0.025 deg sigma) and made the default dive's heading NEES 3.5
-//   (hil-tests/README.md "Consistency"). Updates: DVL, roll/pitch, heading, depth with the
+//   sensor periods: at 50 ms, headings and images were applied at the time of another sample up
+//   to 50 ms earlier (the DVL's, dated by its clock mapping, most likely), which lagged the
+//   heading 18-23 ms in the 10 deg/s turns (0.2 deg at 0.025 deg sigma): heading NEES 6.5 on the
+//   default dive, 0.87 with 5 ms (hil-tests/README.md "Consistency"). Updates: DVL, roll/pitch, heading, depth with the
 //   config mounts and noise (sensor_models.h). Altitude sets the camera footprint size (no
 //   seabed model); angular rates are counted and not used.
 // * Every robot update is applied to the robot bound as well (a Kalman update of B_rr, still an
