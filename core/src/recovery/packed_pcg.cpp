@@ -400,7 +400,9 @@ PcgSummary solve_pcg_packed(const PackedBlockOperator& A, const PackedBlockJacob
   }
   summary.iterations = iteration;
 
-  if (options.recompute_true_residual) {
+  // After 0 iterations R already is the true residual B - A X of the (possibly restarted) warm
+  // start: a residual-only evaluation (NavFilter's certificate) costs one product, not two.
+  if (options.recompute_true_residual && iteration > 0) {
     A.multiply(X, Q, width);
     subtract(B, Q, R, size);
     column_dots(R, R, n, width, rr);

@@ -31,7 +31,7 @@ core::Vec3 read_psd(const YamlReader& r) {
 
 FilterConfig parse_filter(const YamlReader& f) {
   f.expect_map({"process_noise_psd", "cg_iterations_per_step", "latency_window_ms",
-                "gating_chi2_threshold"});
+                "gating_chi2_threshold", "recovery_thread", "recovery_handoff_s"});
   FilterConfig filter;
   if (f.has("process_noise_psd")) {
     const YamlReader p = f.at("process_noise_psd");
@@ -44,6 +44,8 @@ FilterConfig parse_filter(const YamlReader& f) {
   f.read("cg_iterations_per_step", filter.cg_iterations_per_step, 1, 1000);
   f.read("latency_window_ms", filter.latency_window_ms, 0.0, 60000.0);
   f.read("gating_chi2_threshold", filter.gating_chi2_threshold, 1e-6, 1e6);
+  if (f.has("recovery_thread")) filter.recovery_thread = f.at("recovery_thread").as_bool();
+  f.read("recovery_handoff_s", filter.recovery_handoff_s, 0.0, 3600.0);
   return filter;
 }
 

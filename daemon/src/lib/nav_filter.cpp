@@ -21,6 +21,17 @@ core::Status error(core::StatusCode code, const std::string& what) {
   return core::Status::Error(code, "NavFilter: " + what);
 }
 
+/// The filter thread's own StateRecovery: with the recovery thread it only evaluates the
+/// residual of the extended warm start (0 PCG iterations, the certificate of bounds.h); the
+/// iterations run on the thread.
+core::StateRecoveryOptions filter_thread_recovery(const NavFilterOptions& options) {
+  if (!options.recovery_thread) return options.recovery;
+  core::StateRecoveryOptions o = options.recovery;
+  o.mode = core::RecoveryMode::kFixedIterations;
+  o.iterations_per_step = 0;
+  return o;
+}
+
 core::MeasVec vec1(double a) {
   core::MeasVec z(1);
   z << a;
@@ -34,6 +45,8 @@ NavFilterOptions NavFilterOptions::from_config(const NavdConfig& config) {
   o.recovery.mode = core::RecoveryMode::kFixedIterations;
   o.recovery.iterations_per_step = config.filter.cg_iterations_per_step;
   o.camera_gate_chi2 = equivalent_chi_square_gate(config.filter.gating_chi2_threshold, 6, 5);
+  o.recovery_thread = config.filter.recovery_thread;
+  o.recovery_handoff_s = config.filter.recovery_handoff_s;
   return o;
 }
 
@@ -53,7 +66,7 @@ NavFilter::NavFilter(const NavdConfig& config, const RegistrationTable* registra
       sensors_(config),
       registrations_(registrations),
       process_(config.filter.process_noise),
-      recovery_(12, options.recovery),
+      recovery_(12, filter_thread_recovery(options)),
       bounds_(12, options.bounds),
       altitude_m_(options.default_altitude_m) {
   if (!(options_.max_predict_step_s > 0.0) ||
@@ -64,6 +77,14 @@ NavFilter::NavFilter(const NavdConfig& config, const RegistrationTable* registra
     throw std::invalid_argument(
         "NavFilterOptions: max_predict_step_s, default_altitude_m, camera_gate_chi2 and the "
         "initial sigmas must be > 0, proposal_confidence in (0, 1)");
+  }
+  if (!(options_.recovery_handoff_s >= 0.0 && options_.recovery_handoff_s <= 3600.0)) {
+    throw std::invalid_argument("NavFilterOptions: recovery_handoff_s must be in [0, 3600] s, is " +
+                                std::to_string(options_.recovery_handoff_s));
+  }
+  if (options_.recovery_thread) {
+    worker_.worker = std::make_unique<RecoveryWorker>(
+        12, options_.recovery, options_.recovery_test_hook, !options_.recovery_inline);
   }
   proposal_chi2_ = chi_square_quantile(options_.proposal_confidence, 2);
   image_of_block_.push_back(-1);
@@ -84,6 +105,8 @@ core::Status NavFilter::process(const Measurement& m) {
     return core::Status::Ok();
   }
   last_validity_us_ = t_us;
+  // The recovery thread's result is taken at a data time (nav_filter.h "Recovery thread").
+  if (recovery_in_flight() && t_us >= handoff_us_) take_recovery_result();
   // Measurements less than min_predict_step_s after the filter's time are applied at that time
   // (nav_filter.h: a very short prediction makes Q's pose block tiny and Λ ill-conditioned).
   const auto min_step_us = static_cast<std::int64_t>(std::llround(options_.min_predict_step_s * 1e6));
@@ -314,56 +337,12 @@ core::Status NavFilter::on_image(const ImageEvent& image) {
   relinearise_robot();
   current.robot_mean = filter_.mean_block(core::Esdf::kRobotBlock);
   pending_image_ = static_cast<long>(images_.size()) - 1;
+  if (worker_.worker) submit_recovery_job();
   return core::Status::Ok();
 }
 
-bool NavFilter::recover() {
-  if (predicted_since_recovery_) {
-    const core::Vec12 robot = filter_.mean_block(core::Esdf::kRobotBlock);
-    const bool keep = kept_since_recovery_ >= 0;
-    // extend_for_prediction sets Σ'_rr = A Σ_tt Aᵀ + Q: choose Q so that it is the tracked P.
-    const core::Mat12 Q = P_robot_ - A_since_recovery_ * sigma_tt_ * A_since_recovery_.transpose();
-    if (core::Status s = recovery_.extend_for_prediction(A_since_recovery_, Q, robot, keep,
-                                                         kept_since_recovery_);
-        !s.ok()) {
-      spdlog::warn("NavFilter: warm start extension failed ({}); restarting from the filter mean",
-                   s.to_string());
-      Eigen::MatrixXd X = Eigen::MatrixXd::Zero(filter_.information().dim(), 13);
-      X.col(0) = filter_.mean();
-      (void)recovery_.set_solution(X);
-    }
-  }
-  A_since_recovery_.setIdentity();
-  predicted_since_recovery_ = false;
-  kept_since_recovery_ = -1;
-  const core::RecoveryResult result =
-      recovery_.solve(filter_.information(), filter_.information_vector());
-  ++counters_.recoveries;
-  sigma_tt_ = recovery_.robot_covariance();  // the next extension starts from this iterate
-  P_robot_ = sigma_tt_;
-  last_relative_residual_ = result.max_relative_residual;
-  counters_.max_cg_relative_residual =
-      std::max(counters_.max_cg_relative_residual, result.max_relative_residual);
-  if (!result.status.ok()) {
-    ++counters_.recovery_failures;
-    spdlog::warn("NavFilter: recovery at t = {} us failed: {}", time_us_, result.status.to_string());
-    return false;
-  }
-  if (core::Status s = bounds_.set_recovery(recovery_.robot_covariance(),
-                                            result.column_residual_frobenius, filter_.num_blocks());
-      !s.ok()) {
-    ++counters_.recovery_failures;
-    spdlog::warn("NavFilter: bounds certificate at t = {} us: {}", time_us_, s.to_string());
-    return false;
-  }
-  const Eigen::VectorXd& recovered = recovery_.solution().col(0);
-  for (int b = 1; b < filter_.num_blocks(); ++b) {
-    (void)filter_.set_mean_block(b, recovered.segment(Eigen::Index{b} * 12, 12));
-  }
-  return true;
-}
-
 core::Status NavFilter::finish() {
+  if (recovery_in_flight()) take_recovery_result();
   if (!initialised_ || pending_image_ < 0) return core::Status::Ok();
   const std::int64_t step_us = 100'000;  // 0.1 s: keeps the last image's state
   if (core::Status s = predict_once(1e-6 * static_cast<double>(step_us)); !s.ok()) return s;

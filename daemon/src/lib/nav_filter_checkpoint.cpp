@@ -32,6 +32,8 @@ struct NavFilterCheckpointAccess {
   static void put_counters(ByteWriter& w, const NavFilterCounters& c);
   static Status get_counters(ByteReader& r, NavFilterCounters* c);
   static Status check_indices(const ByteReader& r, const NavFilter& f);
+  static void put_recovery_job(ByteWriter& w, const NavFilter& f);
+  static Status get_recovery_job(ByteReader& r, NavFilter* f);
   static Status restore(const core::SectionSet& sections, NavFilter* filter);
 };
 
@@ -328,6 +330,7 @@ std::vector<std::uint8_t> NavFilterCheckpointAccess::encode(const NavFilter& f) 
   put_counters(w, f.counters_);
   w.u32(static_cast<std::uint32_t>(f.sensors_.sensors_.size()));
   for (const auto& s : f.sensors_.sensors_) w.values(s.last_rpy_sensor);
+  put_recovery_job(w, f);
   return w.take();
 }
 
@@ -402,8 +405,72 @@ Status NavFilterCheckpointAccess::decode(ByteReader& r, NavFilter* f) {
                    std::to_string(f->sensors_.sensors_.size()));
   }
   for (auto& s : f->sensors_.sensors_) NAV_TRY(r.values(&s.last_rpy_sensor, "sensor last angles"));
+  NAV_TRY(get_recovery_job(r, f));
   NAV_TRY(r.expect_end());
   return check_indices(r, *f);
+}
+
+// The recovery thread's job in flight, awaited (nav_filter_checkpoint.h): u8 present; then
+// i64 hand-off time, u8 ok, the message (u32 length + bytes) when not ok, the result's
+// iterations (i64) and residuals (5 x f64), and [μ | Σ_{*r}] (ByteWriter::matrix).
+void NavFilterCheckpointAccess::put_recovery_job(ByteWriter& w, const NavFilter& f) {
+  const bool in_flight = f.recovery_in_flight();
+  w.u8(in_flight ? 1 : 0);
+  if (!in_flight) return;
+  const RecoveryOutput& out = f.worker_.worker->peek();  // waits for the job
+  w.i64(f.handoff_us_);
+  w.u8(out.result.status.ok() ? 1 : 0);
+  if (!out.result.status.ok()) {
+    const std::string message = out.result.status.to_string();
+    w.u32(static_cast<std::uint32_t>(message.size()));
+    w.bytes(std::span(reinterpret_cast<const std::uint8_t*>(message.data()), message.size()));
+  }
+  w.i64(out.result.iterations);
+  for (double v : {out.result.mean_relative_residual, out.result.column_relative_residual,
+                   out.result.max_relative_residual, out.result.column_residual_frobenius,
+                   out.result.column_residual_spectral}) {
+    w.f64(v);
+  }
+  if (out.result.status.ok()) {
+    w.matrix(out.solution);
+  } else {
+    w.matrix(Eigen::MatrixXd());
+  }
+}
+
+Status NavFilterCheckpointAccess::get_recovery_job(ByteReader& r, NavFilter* f) {
+  bool in_flight = false;
+  NAV_TRY(get_bool(r, &in_flight, "recovery job present"));
+  if (!in_flight) return Status::Ok();
+  RecoveryOutput out;
+  std::int64_t handoff_us = 0;
+  NAV_TRY(r.i64(&handoff_us, "recovery job hand-off time"));
+  bool ok = false;
+  NAV_TRY(get_bool(r, &ok, "recovery job ok"));
+  if (!ok) {
+    std::uint32_t n = 0;
+    NAV_TRY(r.u32(&n, "recovery job message length"));
+    std::span<const std::uint8_t> text;
+    NAV_TRY(r.raw(&text, n, "recovery job message"));
+    out.result.status = Status::Error(core::StatusCode::kNumericalFailure,
+                                      std::string(text.begin(), text.end()));
+  }
+  std::int64_t iterations = 0;
+  NAV_TRY(r.i64(&iterations, "recovery job iterations"));
+  out.result.iterations = static_cast<int>(iterations);
+  for (double* v : {&out.result.mean_relative_residual, &out.result.column_relative_residual,
+                    &out.result.max_relative_residual, &out.result.column_residual_frobenius,
+                    &out.result.column_residual_spectral}) {
+    NAV_TRY(r.f64(v, "recovery job residual"));
+  }
+  const Eigen::Index rows = f->recovery_.solution().rows();
+  NAV_TRY(r.matrix(&out.solution, ok ? rows : 0, ok ? 13 : 0, !ok, "recovery job solution"));
+  // A filter now configured without the thread drops the job (its warm start stays valid).
+  if (f->worker_.worker) {
+    f->worker_.worker->set_ready(out);
+    f->handoff_us_ = handoff_us;
+  }
+  return Status::Ok();
 }
 
 Status NavFilterCheckpointAccess::check_indices(const ByteReader& r, const NavFilter& f) {

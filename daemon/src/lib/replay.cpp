@@ -60,6 +60,9 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
   if (options.dead_reckoning) {
     NavFilterOptions dr = filter_options;
     dr.propose_links = false;
+    // The twin already runs on its own thread (FilterWorker): a recovery thread of its own
+    // would only compete with the SLAM filter's for the cores. Synchronous recovery.
+    dr.recovery_thread = false;
     run.dead_reckoning = std::make_unique<NavFilter>(config, nullptr, dr);
   }
   Checkpointing ckpt;

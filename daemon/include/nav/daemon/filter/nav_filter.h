@@ -41,6 +41,25 @@
 //   (CameraRelativePoseModel with the camera mount, robot <-> i) and tighten Σ~_ii (bounds
 //   update, constant time). The robot is kept as this image's delayed state by the next
 //   prediction (Esdf::predict keep_current), with its links; finish() keeps a pending one.
+// * Recovery thread (options.recovery_thread; default in navd and replay, filter.recovery_thread):
+//   the PCG iterations move to a RecoveryWorker (recovery_worker.h). At image k the filter
+//   takes the job in flight if any, extends the warm start as above, evaluates its TRUE residual
+//   on the current Λ (a 0-iteration solve: the certificate the bounds need, so the bounds stay
+//   certified whatever the lag) and proposes/applies links exactly as above from it; then it
+//   copies Λ, η (after the links) and the warm start into the worker's buffers and the thread
+//   runs the iterations. The filter takes the result at the first measurement with time of
+//   validity >= t_k + recovery_handoff_s, at the next image or at finish() (whichever comes
+//   first; it waits if the thread is not done): the warm start becomes the result (the
+//   predictions and updates since stay in A and P, P moved by A (Σ'_tt − Σ_tt) Aᵀ), and the
+//   delayed states of the snapshot take its mean (their relinearisation point). Hand-off points
+//   are DATA times, so the outputs are bit-identical whatever the thread timing (and equal to
+//   options.recovery_inline, which runs each job on the filter thread at its hand-off). The
+//   image's relative_residual and max_cg_relative_residual are then those of the certificate
+//   (the extended result of the previous job on the current Λ), the residual the bounds use.
+//   The filter-thread cost per image drops from the PCG iterations (one Λ product each) to the
+//   residual product and the snapshot copy. Checkpoints store an awaited job
+//   (nav_filter_checkpoint.h). Copying a NavFilter gives the copy its own worker (and the job's
+//   result, waited for); destroying it waits for a job in flight.
 // * Proposal test: with Δ = p_i − p_r (world x, y) and its covariance C from the certified
 //   proposal joint [Σ_rr Σ_ri; Σ_ir Σ~_ii], the pair is proposed when the confidence ellipse
 //   Δᵀ C⁻¹ Δ <= chi2(2 dof, proposal_confidence) can reach within D of the origin, tested as
@@ -54,10 +73,12 @@
 //   config's 6-dof filter.gating_chi2_threshold at the same probability, chi_square.h).
 //
 // Work per measurement is O(1) in the map size; per image O(map) (recovery, one proposal test
-// per delayed state), as in the paper. Not thread-safe (one owner thread).
+// per delayed state), as in the paper. Not thread-safe (one owner thread; the recovery thread
+// touches only its own snapshot).
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -68,6 +89,7 @@
 #include "nav/core/status.h"
 #include "nav/daemon/config.h"
 #include "nav/daemon/filter/innovation_stats.h"
+#include "nav/daemon/filter/recovery_worker.h"
 #include "nav/daemon/filter/sensor_models.h"
 #include "nav/daemon/measurement.h"
 #include "nav/daemon/registration_table.h"
@@ -88,9 +110,21 @@ struct NavFilterOptions {
   double camera_gate_chi2 = 15.086;        ///< 5-dof gate (from_config derives it)
   core::StateRecoveryOptions recovery;     ///< fixed iterations (from_config)
   core::BoundsOptions bounds;              ///< certified (default)
+  /// false: the PCG iterations run synchronously at each image (the reference path); true: on
+  /// the recovery thread (file comment "Recovery thread"; from_config: filter.recovery_thread).
+  bool recovery_thread = false;
+  /// Data time from an image's snapshot to the first measurement at which the filter takes the
+  /// thread's result (it waits there if the job is not done), s, >= 0.
+  double recovery_handoff_s = 1.0;
+  /// With recovery_thread: run each job on the filter thread at its hand-off instead of on a
+  /// thread (bit-identical outputs, for checking the thread).
+  bool recovery_inline = false;
+  /// Tests: runs on the recovery thread before each job (e.g. sleeps).
+  std::function<void()> recovery_test_hook;
 
   /// Options for `config`: recovery.iterations_per_step = filter.cg_iterations_per_step,
-  /// camera_gate_chi2 = the 5-dof equivalent of filter.gating_chi2_threshold.
+  /// camera_gate_chi2 = the 5-dof equivalent of filter.gating_chi2_threshold,
+  /// recovery_thread / recovery_handoff_s = filter.recovery_thread / recovery_handoff_s.
   static NavFilterOptions from_config(const NavdConfig& config);
 };
 
@@ -152,8 +186,11 @@ class NavFilter {
   /// End of data: keeps a pending image as a delayed state (a short prediction).
   core::Status finish();
   /// One recovery step now (as at an image, without link proposal), e.g. before a final
-  /// analysis; false if it failed (counted).
-  bool recover_now() { return initialised_ && recover(); }
+  /// analysis; false if it failed (counted). With the recovery thread: takes the job in
+  /// flight, then runs one job on the current Λ and waits for it.
+  bool recover_now();
+  /// A recovery-thread job is in flight (submitted, not yet taken).
+  bool recovery_in_flight() const { return worker_.worker && worker_.worker->busy(); }
 
   bool initialised() const { return initialised_; }
   std::int64_t time_us() const { return time_us_; }
@@ -190,6 +227,13 @@ class NavFilter {
                     const char* what, std::size_t sensor);
   core::Status on_image(const ImageEvent& image);
   bool recover();
+  /// The warm start across everything since the last recovery (file comment "ImageEvent").
+  void extend_warm_start();
+  /// Hands recovery_'s solution (one solve on the current Λ, η) to the bounds and counters.
+  bool certify(const core::RecoveryResult& result);
+  // Recovery thread (nav_filter_recovery.cpp).
+  void submit_recovery_job();
+  void take_recovery_result();
   void propose_and_link(ImageRecord& current);
   bool is_candidate(const ImageRecord& earlier, const ImageRecord& current, int block,
                     core::LinkProposal* joint) const;
@@ -201,8 +245,10 @@ class NavFilter {
   const RegistrationTable* registrations_;
   core::ConstantVelocityModel process_;
   core::Esdf filter_{12};
-  core::StateRecovery recovery_;
+  core::StateRecovery recovery_;  ///< with the thread: 0 iterations (certification only)
   core::CovarianceBounds bounds_;
+  RecoveryWorkerSlot worker_;       ///< the recovery thread (recovery_thread only)
+  std::int64_t handoff_us_ = 0;     ///< data time at which the job in flight is taken
   bool initialised_ = false;
   std::int64_t time_us_ = 0;           ///< the robot's time
   std::int64_t last_validity_us_ = 0;  ///< newest measurement processed
