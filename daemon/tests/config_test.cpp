@@ -199,6 +199,21 @@ sensors:
   EXPECT_EQ(e.key_path(), "filter.process_noise_psd.accel_m2ps3[1]");
 }
 
+TEST(Config, RecoveryThreadKeys) {
+  NavdConfig c = parse_config(kMinimal);
+  EXPECT_TRUE(c.filter.recovery_thread);
+  EXPECT_DOUBLE_EQ(c.filter.recovery_handoff_s, 1.0);
+  c = parse_config(std::string(kMinimal) +
+                   "filter: {recovery_thread: false, recovery_handoff_s: 7.5}\n");
+  EXPECT_FALSE(c.filter.recovery_thread);
+  EXPECT_DOUBLE_EQ(c.filter.recovery_handoff_s, 7.5);
+  ConfigError e = expect_error(std::string(kMinimal) + "filter: {recovery_handoff_s: -0.5}\n");
+  EXPECT_EQ(e.key_path(), "filter.recovery_handoff_s");
+  EXPECT_NE(e.reason().find("is not in [0, 3600]"), std::string::npos) << e.what();
+  e = expect_error(std::string(kMinimal) + "filter: {recovery_thread: maybe}\n");
+  EXPECT_EQ(e.key_path(), "filter.recovery_thread");
+}
+
 TEST(Config, MissingRequiredKeys) {
   EXPECT_EQ(expect_error("filter: {}\n").key_path(), "sensors");
   EXPECT_EQ(expect_error("sensors:\n  - {type: altimeter, transport: {type: sim}}\n").key_path(),

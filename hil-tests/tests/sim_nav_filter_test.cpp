@@ -31,7 +31,7 @@ struct FilterRun {
   daemon::NavFilterCounters counters;
 };
 
-FilterRun run_filter(const std::filesystem::path& dir, bool links) {
+FilterRun run_filter(const std::filesystem::path& dir, bool links, bool recovery_thread = true) {
   const daemon::NavdConfig cfg = daemon::load_config_file((dir / "config.yaml").string());
   const std::string log = (dir / "dive.lcmlog").string();
   const daemon::RegistrationTable table = daemon::load_registrations(log);
@@ -47,6 +47,7 @@ FilterRun run_filter(const std::filesystem::path& dir, bool links) {
   });
   daemon::NavFilterOptions fo = daemon::NavFilterOptions::from_config(cfg);
   fo.propose_links = links;
+  fo.recovery_thread = recovery_thread;
   daemon::NavFilter filter(cfg, &table, fo);
   constexpr std::int64_t kMergeUs = 1000;
   std::int64_t last_us = 0;
@@ -95,6 +96,35 @@ TEST(SimNavFilter, LinksBoundTheDriftOfDeadReckoning) {
   EXPECT_LT(slam.max_xy_error_m, 1.0);
   EXPECT_LT(slam.max_xy_error_m, dr.max_xy_error_m);
   EXPECT_EQ(slam.counters.outliers_accepted, 0u);
+}
+
+// The recovery thread (the default) against synchronous recovery on the same simulated dive:
+// stated tolerance 5 cm on the final and the largest xy error, link decisions within 3 %,
+// no outlier accepted by either.
+TEST(SimNavFilter, RecoveryThreadAgreesWithSynchronousRecovery) {
+  const auto dir = scratch_dir("filter-thread");
+  SimOptions o;
+  o.out_dir = dir.string();
+  o.seed = 4;
+  o.mission.images = 100;
+  simulate_dive(o, sim_config_path().string());
+  const FilterRun threaded = run_filter(dir, true, true);
+  const FilterRun sync = run_filter(dir, true, false);
+  std::printf("thread: final %.3f m, max %.3f m, links %llu; synchronous: final %.3f m, max "
+              "%.3f m, links %llu\n",
+              threaded.final_xy_error_m, threaded.max_xy_error_m,
+              static_cast<unsigned long long>(threaded.counters.links_accepted),
+              sync.final_xy_error_m, sync.max_xy_error_m,
+              static_cast<unsigned long long>(sync.counters.links_accepted));
+  EXPECT_NEAR(threaded.final_xy_error_m, sync.final_xy_error_m, 0.05);
+  EXPECT_NEAR(threaded.max_xy_error_m, sync.max_xy_error_m, 0.05);
+  const auto lt = static_cast<double>(threaded.counters.links_accepted);
+  const auto ls = static_cast<double>(sync.counters.links_accepted);
+  EXPECT_GT(ls, 100.0);
+  EXPECT_NEAR(lt, ls, 0.03 * ls);
+  EXPECT_EQ(threaded.counters.outliers_accepted, 0u);
+  EXPECT_EQ(sync.counters.outliers_accepted, 0u);
+  EXPECT_EQ(threaded.counters.recovery_failures, 0u);
 }
 
 }  // namespace

@@ -37,7 +37,8 @@ bool NavFilter::certify(const core::RecoveryResult& result) {
       std::max(counters_.max_cg_relative_residual, result.max_relative_residual);
   if (!result.status.ok()) {
     ++counters_.recovery_failures;
-    spdlog::warn("NavFilter: recovery at t = {} us failed: {}", time_us_, result.status.to_string());
+    spdlog::warn("NavFilter: recovery at t = {} us failed: {}", time_us_,
+                 result.status.to_string());
     return false;
   }
   if (core::Status s = bounds_.set_recovery(recovery_.robot_covariance(),
@@ -80,9 +81,9 @@ bool NavFilter::recover_now() {
 }
 
 void NavFilter::submit_recovery_job() {
-  worker_.worker->submit(filter_.information(), filter_.information_vector(),
-                         recovery_.solution());
-  handoff_us_ = time_us_ + static_cast<std::int64_t>(std::llround(options_.recovery_handoff_s * 1e6));
+  worker_.worker->submit(filter_.information(), filter_.information_vector(), recovery_.solution());
+  handoff_us_ =
+      time_us_ + static_cast<std::int64_t>(std::llround(options_.recovery_handoff_s * 1e6));
 }
 
 void NavFilter::take_recovery_result() {

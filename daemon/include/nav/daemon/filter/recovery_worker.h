@@ -78,11 +78,11 @@ class RecoveryWorker {
   core::StateRecoveryOptions options_;
   std::function<void()> hook_;
   bool threaded_;
-  core::StateRecovery recovery_;       // the worker's solver (preconditioner cache, scratch)
-  core::InformationMatrix lambda_;     // snapshot
-  Eigen::VectorXd eta_;                // snapshot
+  core::StateRecovery recovery_;    // the worker's solver (preconditioner cache, scratch)
+  core::InformationMatrix lambda_;  // snapshot
+  Eigen::VectorXd eta_;             // snapshot
   RecoveryOutput output_;
-  bool submitted_ = false;             // owner thread only
+  bool submitted_ = false;  // owner thread only
   std::mutex mutex_;
   std::condition_variable cv_;
   bool job_ready_ = false;  // guarded: a job waits for the worker
