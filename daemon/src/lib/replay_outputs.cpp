@@ -165,7 +165,10 @@ std::string replay_summary_json(const ReplayRun& run, const ReplayAnalysis& anal
   }
   j["max_cg_relative_residual"] = c.max_cg_relative_residual;
   j["cg_iterations_per_image"] = run.slam->options().recovery.iterations_per_step;
-  j["recovery"] = "synchronous at each image (deterministic)";
+  j["recovery"] = run.slam->options().recovery_thread
+                      ? "recovery thread, taken at data time image + recovery_handoff_s "
+                        "(deterministic)"
+                      : "synchronous at each image (deterministic)";
   j["candidates"] = c.candidates;
   j["links_proposed"] = c.links_proposed;
   j["links_accepted"] = c.links_accepted;

@@ -13,8 +13,8 @@
 //   the uninterrupted one (a checkpoint may be taken at any measurement; the wait is at most
 //   one job of fixed iterations). A filter resumed with the thread off drops that result.
 // Section "NAVF", version 3 (v2: held measurements, newest validity, link z/R/innovation,
-// images' initial bounds; v3: the recovery job), little-endian (core/serialization/byte_io.h); the layout is the
-// order of the fields in nav_filter_checkpoint.cpp's encode(). Decoding checks every count
+// images' initial bounds; v3: the recovery job), little-endian (core/serialization/byte_io.h);
+// the layout is the order of the fields in nav_filter_checkpoint.cpp's encode(). Decoding checks every count
 // against the bytes present, every index against the filter (blocks, images, links, sensors).
 // The filter to restore into is built from the same config and options first (they are not in
 // the checkpoint: a changed config takes effect on resume); on error it is left unchanged.

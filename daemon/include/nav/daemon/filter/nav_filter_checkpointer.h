@@ -7,7 +7,10 @@
 //
 // Threads: after_measurement() and shutdown() run on the filter thread; serialising the map is
 // O(map) there once per `checkpoint.period_s` (wall clock), the disk write is on the
-// checkpoint thread. resume_nav_filter() runs once before the threads start.
+// checkpoint thread; with a recovery-thread job in flight it first waits for that job (at most
+// one job of fixed iterations) and stores its result (nav_filter_checkpoint.h), so a
+// checkpoint can be taken at any measurement. resume_nav_filter() runs once before the threads
+// start.
 
 #include <chrono>
 #include <cstdint>

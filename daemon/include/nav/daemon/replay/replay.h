@@ -6,9 +6,12 @@
 // (NAV_REGISTRATION) are read before the replay (load_registrations), as the vision stage's
 // stand-in.
 //
-// Recovery runs synchronously inside NavFilter at each image, with the configured fixed PCG
-// iterations (filter.cg_iterations_per_step per image), so the result does not depend on thread
-// timing: as fast as possible, the same log and config give the same output.
+// Recovery: the configured fixed PCG iterations (filter.cg_iterations_per_step per image) on
+// NavFilter's recovery thread, whose results the filter takes at data times
+// (filter.recovery_handoff_s; nav_filter.h "Recovery thread"), or synchronously at each image
+// (filter.recovery_thread: false); either way the result does not depend on thread timing: as
+// fast as possible, the same log and config give the same output. The dead-reckoning twin
+// recovers synchronously (it already runs on its own thread).
 //
 // After the replay, analyse() computes what the replay output files need: the final mean
 // (direct solve), exact marginals (CHOLMOD + Takahashi), bound-vs-exact checks, and the Fig. 3
