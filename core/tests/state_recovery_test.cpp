@@ -9,6 +9,7 @@
 #include <cmath>
 #include <random>
 
+#include "nav/core/filter/information_matrix.h"
 #include "nav/core/posegraph/g2o.h"
 #include "nav/testing/data.h"
 
@@ -146,6 +147,48 @@ TEST(StateRecovery, ModesAgreeWithDenseSolution) {
     EXPECT_LT(r.max_relative_residual, previous);
     previous = r.max_relative_residual;
   }
+}
+
+// The packed kernel on an InformationMatrix: without the final residual product the iterate is
+// the same (bit for bit) and the reported residual is the recurrence's, close to the true one;
+// after 0 iterations the reported residual is the true residual of the warm start itself.
+TEST(StateRecovery, ResidualOptionsOfThePackedKernel) {
+  const int d = 6, blocks = 8, n = blocks * d;
+  const Eigen::MatrixXd dense = random_spd(n, 21, 0.05).inverse();
+  InformationMatrix lambda(d);
+  for (int b = 0; b < blocks; ++b) lambda.add_block();
+  for (int i = 0; i < blocks; ++i) {
+    for (int j = i; j < blocks; ++j) lambda.add_to_block(i, j, dense.block(i * d, j * d, d, d));
+  }
+  ASSERT_LT((lambda.to_dense() - dense).norm(), 1e-12 * dense.norm());
+  const Eigen::VectorXd eta = random_matrix(n, 1, 22);
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, 1 + d);
+  rhs.col(0) = eta;
+  rhs.block(0, 1, d, d).setIdentity();
+  // A warm start near the solution (one worse than zero would restart from zero).
+  const Eigen::MatrixXd exact = dense.ldlt().solve(rhs);
+  const Eigen::MatrixXd warm = exact + 1e-3 * exact.norm() * random_matrix(n, 1 + d, 23);
+  auto solve = [&](int iterations, bool recompute, RecoveryResult* result) {
+    StateRecoveryOptions o;
+    o.iterations_per_step = iterations;
+    o.recompute_true_residual = recompute;
+    StateRecovery recovery(d, o);
+    EXPECT_TRUE(recovery.set_solution(warm).ok());
+    *result = recovery.solve(lambda, eta);
+    EXPECT_TRUE(result->status.ok()) << result->status.to_string();
+    return Eigen::MatrixXd(recovery.solution());
+  };
+  RecoveryResult with, without, zero;
+  const Eigen::MatrixXd x_with = solve(5, true, &with);
+  const Eigen::MatrixXd x_without = solve(5, false, &without);
+  EXPECT_EQ((x_with - x_without).cwiseAbs().maxCoeff(), 0.0);
+  const double true_frobenius = (rhs - dense * x_with).rightCols(d).norm();
+  EXPECT_NEAR(with.column_residual_frobenius, true_frobenius, 1e-9 * true_frobenius);
+  EXPECT_NEAR(without.column_residual_frobenius, true_frobenius, 1e-6 * true_frobenius);
+  const Eigen::MatrixXd x_zero = solve(0, true, &zero);
+  EXPECT_EQ((x_zero - warm).cwiseAbs().maxCoeff(), 0.0);  // no column restarted here
+  const double warm_frobenius = (rhs - dense * warm).rightCols(d).norm();
+  EXPECT_NEAR(zero.column_residual_frobenius, warm_frobenius, 1e-12 * warm_frobenius);
 }
 
 /// SPD matrix with eigenvalues log-spaced in [1, condition] and random eigenvectors: across

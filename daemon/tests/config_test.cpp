@@ -202,7 +202,7 @@ sensors:
 TEST(Config, RecoveryThreadKeys) {
   NavdConfig c = parse_config(kMinimal);
   EXPECT_TRUE(c.filter.recovery_thread);
-  EXPECT_DOUBLE_EQ(c.filter.recovery_handoff_s, 1.0);
+  EXPECT_DOUBLE_EQ(c.filter.recovery_handoff_s, 10.0);
   c = parse_config(std::string(kMinimal) +
                    "filter: {recovery_thread: false, recovery_handoff_s: 7.5}\n");
   EXPECT_FALSE(c.filter.recovery_thread);

@@ -90,7 +90,18 @@ TEST(RecoveryThread, OutputsBitIdenticalAcrossRunsDelaysAndInline) {
   const Fixture fx(60.0);
   NavFilterOptions o = fx.options;
   ASSERT_TRUE(o.recovery_thread);  // the default from the config
+  // Hand-off 0.5 s after each image (images every 2 s): taken at a measurement in process().
+  NavFilterOptions early = o;
+  early.recovery_handoff_s = 0.5;
+  const Bytes early_bytes = run_all(fx, early);
+  early.recovery_test_hook = random_delays(3);
+  EXPECT_EQ(run_all(fx, early), early_bytes) << "hand-off 0.5 s, random delays";
+  early.recovery_test_hook = {};
+  early.recovery_inline = true;
+  EXPECT_EQ(run_all(fx, early), early_bytes) << "hand-off 0.5 s, inline";
+  // Default hand-off (10 s): the next image takes each job.
   const Bytes first = run_all(fx, o);
+  EXPECT_NE(first, early_bytes) << "the hand-off time is a data-time schedule of its own";
   EXPECT_EQ(run_all(fx, o), first) << "second run";
   for (unsigned seed : {1u, 2u}) {
     NavFilterOptions delayed = o;

@@ -204,6 +204,7 @@ PcgOptions StateRecovery::pcg_options() const {
     pcg.max_iterations = options_.max_iterations;
     pcg.relative_tolerance = options_.relative_tolerance;
   }
+  pcg.recompute_true_residual = options_.recompute_true_residual;
   return pcg;
 }
 

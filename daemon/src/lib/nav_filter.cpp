@@ -83,8 +83,12 @@ NavFilter::NavFilter(const NavdConfig& config, const RegistrationTable* registra
                                 std::to_string(options_.recovery_handoff_s));
   }
   if (options_.recovery_thread) {
-    worker_.worker = std::make_unique<RecoveryWorker>(
-        12, options_.recovery, options_.recovery_test_hook, !options_.recovery_inline);
+    // The job's iterate is certified by the filter on its current Λ at the next image (true
+    // residual there), so the job skips its own final residual product.
+    core::StateRecoveryOptions job = options_.recovery;
+    job.recompute_true_residual = false;
+    worker_.worker = std::make_unique<RecoveryWorker>(12, job, options_.recovery_test_hook,
+                                                      !options_.recovery_inline);
   }
   proposal_chi2_ = chi_square_quantile(options_.proposal_confidence, 2);
   image_of_block_.push_back(-1);

@@ -4,7 +4,8 @@
 // (filter.latency_window_ms) -> NavFilter -> Publisher / LinkPublisher path as navd --replay,
 // paced by the devices themselves. No registration table (the vision stage is not wired yet):
 // links are proposed and published, none is accepted. Recovery runs on NavFilter's recovery
-// thread (filter.cg_iterations_per_step per image, filter.recovery_handoff_s), as in --replay. With `checkpoints`, the SLAM filter resumes
+// thread (filter.cg_iterations_per_step per image, filter.recovery_handoff_s), as in --replay.
+// With `checkpoints`, the SLAM filter resumes
 // from the newest valid checkpoint of input "live" in checkpoint.path and writes checkpoints
 // there (checkpoint.period_s, at shutdown), as --replay --checkpoints does for a log.
 // sd_notify READY/WATCHDOG (from the main thread, so a quiet sensor set keeps the watchdog fed)

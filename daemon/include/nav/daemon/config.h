@@ -135,8 +135,9 @@ struct FilterConfig {
   /// PCG iterations on the recovery thread (true) or synchronously at each image (false).
   bool recovery_thread = true;
   /// Data time from an image to the measurement at which the filter takes the recovery
-  /// thread's result, s, [0, 3600] (nav_filter.h "Recovery thread").
-  double recovery_handoff_s = 1.0;
+  /// thread's result, s, [0, 3600] (nav_filter.h "Recovery thread"; the next image takes it
+  /// earlier: 10 s is past sim.yaml's 8 s image period, so replays overlap a whole period).
+  double recovery_handoff_s = 10.0;
 };
 
 struct LcmChannel {

@@ -75,6 +75,11 @@ struct StateRecoveryOptions {
   int max_iterations = 5000;
   /// Solver of the PCG modes on an InformationMatrix (CSR snapshots always use pcg.h).
   RecoveryKernel kernel = RecoveryKernel::kPacked;
+  /// PCG modes: recompute the true residual B - Λ X after the iterations (one more Λ product).
+  /// false reports the recurrence residual instead: only for a caller that certifies the
+  /// result elsewhere (NavFilter's recovery thread: the filter evaluates the true residual of
+  /// the extended result on its current Λ before the bounds use it).
+  bool recompute_true_residual = true;
 
   Status validate() const;
 };

@@ -57,7 +57,16 @@
 //   image's relative_residual and max_cg_relative_residual are then those of the certificate
 //   (the extended result of the previous job on the current Λ), the residual the bounds use.
 //   The filter-thread cost per image drops from the PCG iterations (one Λ product each) to the
-//   residual product and the snapshot copy. Checkpoints store an awaited job
+//   residual product and the snapshot copy; the job skips its own final residual product
+//   (StateRecoveryOptions::recompute_true_residual = false: the certificate above replaces it).
+//   Hand-off choice: replaying the default dive, the job (5 iterations) costs more CPU than the
+//   filter's own work between two images (perf: 9.8 s vs ~6 s over the dive), so a hand-off
+//   1 s after the image overlaps only ~1/8 of that work and the filter waits for nearly the
+//   whole job; the default 10 s (the next image, 8 s later, takes it first) overlaps it all.
+//   Between images nothing reads the delayed states the job refines except checkpoints and
+//   published bounds (after the first prediction past the image the robot's only neighbour is
+//   the newly kept state, not in the job's snapshot), so a later hand-off mostly delays when
+//   they show the refined mean. Checkpoints store an awaited job
 //   (nav_filter_checkpoint.h). Copying a NavFilter gives the copy its own worker (and the job's
 //   result, waited for); destroying it waits for a job in flight.
 // * Proposal test: with Δ = p_i − p_r (world x, y) and its covariance C from the certified
@@ -115,7 +124,7 @@ struct NavFilterOptions {
   bool recovery_thread = false;
   /// Data time from an image's snapshot to the first measurement at which the filter takes the
   /// thread's result (it waits there if the job is not done), s, >= 0.
-  double recovery_handoff_s = 1.0;
+  double recovery_handoff_s = 10.0;
   /// With recovery_thread: run each job on the filter thread at its hand-off instead of on a
   /// thread (bit-identical outputs, for checking the thread).
   bool recovery_inline = false;
