@@ -201,11 +201,11 @@ sensors:
 
 TEST(Config, RecoveryThreadKeys) {
   NavdConfig c = parse_config(kMinimal);
-  EXPECT_TRUE(c.filter.recovery_thread);
+  EXPECT_FALSE(c.filter.recovery_thread);
   EXPECT_DOUBLE_EQ(c.filter.recovery_handoff_s, 10.0);
   c = parse_config(std::string(kMinimal) +
-                   "filter: {recovery_thread: false, recovery_handoff_s: 7.5}\n");
-  EXPECT_FALSE(c.filter.recovery_thread);
+                   "filter: {recovery_thread: true, recovery_handoff_s: 7.5}\n");
+  EXPECT_TRUE(c.filter.recovery_thread);
   EXPECT_DOUBLE_EQ(c.filter.recovery_handoff_s, 7.5);
   ConfigError e = expect_error(std::string(kMinimal) + "filter: {recovery_handoff_s: -0.5}\n");
   EXPECT_EQ(e.key_path(), "filter.recovery_handoff_s");

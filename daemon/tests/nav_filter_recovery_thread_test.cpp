@@ -38,6 +38,7 @@ struct Fixture {
     o.duration_s = duration_s;
     dive = nav::testing::make_synthetic_dive(config, o);
     options = NavFilterOptions::from_config(config);
+    options.recovery_thread = true;  // opt-in (filter.recovery_thread)
   }
   std::unique_ptr<NavFilter> make(const NavFilterOptions& o) const {
     return std::make_unique<NavFilter>(config, &dive.registrations, o);
@@ -89,7 +90,6 @@ std::size_t after_image(const std::vector<Measurement>& ms, double fraction) {
 TEST(RecoveryThread, OutputsBitIdenticalAcrossRunsDelaysAndInline) {
   const Fixture fx(60.0);
   NavFilterOptions o = fx.options;
-  ASSERT_TRUE(o.recovery_thread);  // the default from the config
   // Hand-off 0.5 s after each image (images every 2 s): taken at a measurement in process().
   NavFilterOptions early = o;
   early.recovery_handoff_s = 0.5;

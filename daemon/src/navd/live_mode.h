@@ -3,8 +3,9 @@
 // (navd/device_sources.h) feed the same MeasurementQueue -> TimeOrderingBuffer
 // (filter.latency_window_ms) -> NavFilter -> Publisher / LinkPublisher path as navd --replay,
 // paced by the devices themselves. No registration table (the vision stage is not wired yet):
-// links are proposed and published, none is accepted. Recovery runs on NavFilter's recovery
-// thread (filter.cg_iterations_per_step per image, filter.recovery_handoff_s), as in --replay.
+// links are proposed and published, none is accepted. Recovery runs inside NavFilter per image
+// (filter.cg_iterations_per_step; on its recovery thread with filter.recovery_thread), as in
+// --replay.
 // With `checkpoints`, the SLAM filter resumes
 // from the newest valid checkpoint of input "live" in checkpoint.path and writes checkpoints
 // there (checkpoint.period_s, at shutdown), as --replay --checkpoints does for a log.

@@ -3,8 +3,9 @@
 // and NavFilter as navd (nav/daemon/replay/replay.h), with a dead-reckoning twin, and prints a
 // JSON summary; --out writes the replay output directory (summary.json, trajectory.csv,
 // dead_reckoning.csv, states.csv, links.csv, proposals.csv, information_blocks.csv,
-// logdet.csv). Recovery: the configured fixed PCG iterations on NavFilter's recovery thread,
-// taken at data times (nav_filter.h), so the output does not depend on timing. Default config:
+// logdet.csv). Recovery: the configured fixed PCG iterations at each image, synchronously or
+// on NavFilter's recovery thread (filter.recovery_thread) taken at data times (nav_filter.h),
+// so the output does not depend on timing. Default config:
 // DIVE/config.yaml.
 #include <filesystem>
 #include <iostream>
@@ -70,8 +71,8 @@ void add_replay(CLI::App& app) {
       "(ESDF, link proposal from the Algorithm 1 bounds, registration look-up, 5-dof gate), "
       "plus a dead-reckoning twin; JSON summary, --out writes the replay output files "
       "(hil-tests/README.md). Recovery: fixed PCG iterations (filter.cg_iterations_per_step) "
-      "on the recovery thread, taken at a data time (filter.recovery_handoff_s after each "
-      "image), or synchronously at each image (filter.recovery_thread: false); deterministic.");
+      "synchronously at each image, or on the recovery thread (filter.recovery_thread: true) "
+      "taken at a data time (filter.recovery_handoff_s after each image); deterministic.");
   cmd->add_option("dive", args->input, "dive directory (with dive.lcmlog) or a .lcmlog file")
       ->required();
   cmd->add_option("--config", args->config_path, "navd config (default DIVE/config.yaml)");

@@ -132,8 +132,10 @@ struct FilterConfig {
   int cg_iterations_per_step = 5;               ///< [1, 1000]
   double latency_window_ms = 200.0;             ///< [0, 60000]
   double gating_chi2_threshold = 16.81;         ///< [1e-6, 1e6]; 16.81 = chi2(6 dof, 99 %)
-  /// PCG iterations on the recovery thread (true) or synchronously at each image (false).
-  bool recovery_thread = true;
+  /// PCG iterations on the recovery thread (true) or synchronously at each image (false, the
+  /// default: on the 2-core machine the thread made the default dive's replay ~15 % slower,
+  /// README "Recovery thread").
+  bool recovery_thread = false;
   /// Data time from an image to the measurement at which the filter takes the recovery
   /// thread's result, s, [0, 3600] (nav_filter.h "Recovery thread"; the next image takes it
   /// earlier: 10 s is past sim.yaml's 8 s image period, so replays overlap a whole period).

@@ -41,7 +41,8 @@
 //   (CameraRelativePoseModel with the camera mount, robot <-> i) and tighten Σ~_ii (bounds
 //   update, constant time). The robot is kept as this image's delayed state by the next
 //   prediction (Esdf::predict keep_current), with its links; finish() keeps a pending one.
-// * Recovery thread (options.recovery_thread; default in navd and replay, filter.recovery_thread):
+// * Recovery thread (options.recovery_thread, filter.recovery_thread; opt-in, measured in README
+//   "Recovery thread"):
 //   the PCG iterations move to a RecoveryWorker (recovery_worker.h). At image k the filter
 //   takes the job in flight if any, extends the warm start as above, evaluates its TRUE residual
 //   on the current Λ (a 0-iteration solve: the certificate the bounds need, so the bounds stay
@@ -63,6 +64,9 @@
 //   filter's own work between two images (perf: 9.8 s vs ~6 s over the dive), so a hand-off
 //   1 s after the image overlaps only ~1/8 of that work and the filter waits for nearly the
 //   whole job; the default 10 s (the next image, 8 s later, takes it first) overlaps it all.
+//   Measured on the 2-core machine (README): the replay still got ~15 % slower than with
+//   synchronous recovery (the Λ copy and the certificate product add CPU, and the job competes
+//   with the dead-reckoning twin's thread), so the thread is opt-in.
 //   Between images nothing reads the delayed states the job refines except checkpoints and
 //   published bounds (after the first prediction past the image the robot's only neighbour is
 //   the newly kept state, not in the job's snapshot), so a later hand-off mostly delays when

@@ -6,10 +6,10 @@
 // (NAV_REGISTRATION) are read before the replay (load_registrations), as the vision stage's
 // stand-in.
 //
-// Recovery: the configured fixed PCG iterations (filter.cg_iterations_per_step per image) on
-// NavFilter's recovery thread, whose results the filter takes at data times
-// (filter.recovery_handoff_s; nav_filter.h "Recovery thread"), or synchronously at each image
-// (filter.recovery_thread: false); either way the result does not depend on thread timing: as
+// Recovery: the configured fixed PCG iterations (filter.cg_iterations_per_step per image)
+// synchronously at each image, or with filter.recovery_thread on NavFilter's recovery thread,
+// whose results the filter takes at data times (filter.recovery_handoff_s; nav_filter.h
+// "Recovery thread"); either way the result does not depend on thread timing: as
 // fast as possible, the same log and config give the same output. The dead-reckoning twin
 // recovers synchronously (it already runs on its own thread).
 //
