@@ -115,6 +115,7 @@ TEST(Config, RovYamlLoads) {
   const auto* can = std::get_if<CanTransport>(&c.sensors[5].transport);
   ASSERT_NE(can, nullptr);
   EXPECT_EQ(can->interface, "can0");
+  EXPECT_TRUE(c.filter.recovery_thread);  // the vehicle runs CG beside the filter thread
   // Relative to rov.yaml's directory, loaded and validated with the config.
   EXPECT_EQ(can->signals_file, (config_dir() / "can/dvl_fog_example.yaml").string());
   EXPECT_FALSE(can->signals.messages.empty());
