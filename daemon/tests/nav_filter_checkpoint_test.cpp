@@ -18,34 +18,14 @@
 #include "nav/daemon/filter/nav_filter.h"
 #include "nav/daemon/filter/nav_filter_checkpointer.h"
 #include "nav/daemon/resume_point.h"
-#include "support/synthetic_dive.h"
+#include "support/nav_filter_fixture.h"
 
 namespace nav::daemon {
 namespace {
 
-using Bytes = std::vector<std::uint8_t>;
-
-struct Fixture {
-  Fixture(double duration_s) {
-    config = load_config_file("config/sim.yaml");  // ctest runs in the source directory
-    nav::testing::SyntheticDiveOptions o;
-    o.duration_s = duration_s;
-    dive = nav::testing::make_synthetic_dive(config, o);
-    options = NavFilterOptions::from_config(config);
-  }
-  std::unique_ptr<NavFilter> make() const {
-    return std::make_unique<NavFilter>(config, &dive.registrations, options);
-  }
-  NavdConfig config;
-  nav::testing::SyntheticDive dive;
-  NavFilterOptions options;
-};
-
-Bytes encode(const NavFilter& f) {
-  core::SectionWriter w;
-  EXPECT_TRUE(add_nav_filter_sections(f, &w).ok());
-  return w.finish();
-}
+using nav::testing::Bytes;
+using nav::testing::encode;
+using Fixture = nav::testing::NavFilterFixture;
 
 core::Status restore(const Bytes& payload, NavFilter* f, bool verify_crc = true) {
   core::SectionSet set;

@@ -24,37 +24,20 @@
 #include "nav/daemon/config.h"
 #include "nav/daemon/filter/nav_filter.h"
 #include "nav/daemon/filter/nav_filter_checkpoint.h"
-#include "support/synthetic_dive.h"
+#include "support/nav_filter_fixture.h"
 
 namespace nav::daemon {
 namespace {
 
-using Bytes = std::vector<std::uint8_t>;
+using nav::testing::Bytes;
+using nav::testing::encode;
 
-struct Fixture {
-  explicit Fixture(double duration_s) {
-    config = load_config_file("config/sim.yaml");  // ctest runs in the source directory
-    nav::testing::SyntheticDiveOptions o;
-    o.duration_s = duration_s;
-    dive = nav::testing::make_synthetic_dive(config, o);
-    options = NavFilterOptions::from_config(config);
-    options.recovery_thread = true;  // opt-in (filter.recovery_thread)
+/// The synthetic dive with the recovery thread on (opt-in: filter.recovery_thread).
+struct Fixture : nav::testing::NavFilterFixture {
+  explicit Fixture(double duration_s) : NavFilterFixture(duration_s) {
+    options.recovery_thread = true;
   }
-  std::unique_ptr<NavFilter> make(const NavFilterOptions& o) const {
-    return std::make_unique<NavFilter>(config, &dive.registrations, o);
-  }
-  NavdConfig config;
-  nav::testing::SyntheticDive dive;
-  NavFilterOptions options;
 };
-
-/// The whole filter state as its checkpoint bytes (ESDF, bounds, warm start, NAVF: images,
-/// links, counters, ...).
-Bytes encode(const NavFilter& f) {
-  core::SectionWriter w;
-  EXPECT_TRUE(add_nav_filter_sections(f, &w).ok());
-  return w.finish();
-}
 
 Bytes run_all(const Fixture& fx, const NavFilterOptions& o) {
   auto f = fx.make(o);

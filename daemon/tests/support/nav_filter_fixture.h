@@ -1,0 +1,47 @@
+#pragma once
+// NavFilter on the synthetic dive of support/synthetic_dive.h, for tests that compare whole
+// filter states (checkpoints, the recovery thread): the shipped config/sim.yaml (ctest runs in
+// the source directory), the dive, the config's filter options, and the filter's whole state
+// as its checkpoint bytes (ESDF, bounds, warm start, NAVF: images, links, counters, ...).
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "nav/core/serialization/sections.h"
+#include "nav/daemon/config.h"
+#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/filter/nav_filter_checkpoint.h"
+#include "synthetic_dive.h"
+
+namespace nav::testing {
+
+using Bytes = std::vector<std::uint8_t>;
+
+struct NavFilterFixture {
+  explicit NavFilterFixture(double duration_s) {
+    config = daemon::load_config_file("config/sim.yaml");
+    SyntheticDiveOptions o;
+    o.duration_s = duration_s;
+    dive = make_synthetic_dive(config, o);
+    options = daemon::NavFilterOptions::from_config(config);
+  }
+  std::unique_ptr<daemon::NavFilter> make(const daemon::NavFilterOptions& o) const {
+    return std::make_unique<daemon::NavFilter>(config, &dive.registrations, o);
+  }
+  std::unique_ptr<daemon::NavFilter> make() const { return make(options); }
+
+  daemon::NavdConfig config;
+  SyntheticDive dive;
+  daemon::NavFilterOptions options;
+};
+
+/// The whole filter state as its checkpoint bytes.
+inline Bytes encode(const daemon::NavFilter& f) {
+  core::SectionWriter w;
+  EXPECT_TRUE(daemon::add_nav_filter_sections(f, &w).ok());
+  return w.finish();
+}
+
+}  // namespace nav::testing
