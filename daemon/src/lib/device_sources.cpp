@@ -3,6 +3,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <thread>
+
 #include "nav/daemon/sources/camera_source.h"
 #include "nav/drivers/transports/gige_camera.h"
 #include "nav/drivers/transports/serial_port.h"
@@ -17,6 +19,7 @@ struct DeviceSources::Device {
   std::uint16_t index;
   MeasurementQueue::Producer producer;
   std::unique_ptr<SensorDecoder> decoder;  ///< null for cameras
+  std::atomic<bool> finished{false};       ///< its thread has returned from run()
 };
 
 namespace {
@@ -96,7 +99,10 @@ DeviceSources::~DeviceSources() { join(); }
 std::size_t DeviceSources::start(const std::atomic<bool>& stop) {
   for (auto& device : devices_) {
     Device* d = device.get();
-    threads_.emplace_back([this, d, &stop] { run(*d, stop); });
+    threads_.emplace_back([this, d, &stop] {
+      run(*d, stop);
+      d->finished.store(true);
+    });
   }
   return threads_.size();
 }
@@ -105,6 +111,29 @@ void DeviceSources::join() {
   for (std::thread& t : threads_) {
     if (t.joinable()) t.join();
   }
+}
+
+std::vector<std::string> DeviceSources::join_until(std::chrono::steady_clock::time_point deadline) {
+  auto all_finished = [&] {
+    for (std::size_t i = 0; i < threads_.size(); ++i) {
+      if (threads_[i].joinable() && !devices_[i]->finished.load()) return false;
+    }
+    return true;
+  };
+  while (!all_finished() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  std::vector<std::string> abandoned;
+  for (std::size_t i = 0; i < threads_.size(); ++i) {
+    if (!threads_[i].joinable()) continue;
+    if (devices_[i]->finished.load()) {
+      threads_[i].join();
+    } else {
+      abandoned.push_back(devices_[i]->sensor.name);
+      threads_[i].detach();
+    }
+  }
+  return abandoned;
 }
 
 void DeviceSources::run(Device& d, const std::atomic<bool>& stop) {

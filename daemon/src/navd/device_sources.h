@@ -11,7 +11,10 @@
 // Not in replay: a dive's config names the vehicle's devices, which must not be opened then.
 
 #include <atomic>
+#include <chrono>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "nav/daemon/config.h"
 #include "nav/daemon/measurement_queue.h"
@@ -36,6 +39,12 @@ class NavdDevices {
   /// Starts the device threads; returns how many (0 when every sensor is `sim`).
   std::size_t start(const std::atomic<bool>& stop) { return sources_->start(stop); }
   void join() { sources_->join(); }
+  /// Joins the threads that end by `deadline`; the names of those left running (stuck in a
+  /// device call, e.g. Aravis GVCP to a vanished camera). After a non-empty return this object
+  /// must never be destroyed (its destructor would wait for them): the caller ends the process.
+  std::vector<std::string> join_until(std::chrono::steady_clock::time_point deadline) {
+    return sources_->join_until(deadline);
+  }
   daemon::SensorHealthBoard& health() { return health_; }
 
  private:

@@ -5,8 +5,10 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <optional>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -19,14 +21,18 @@
 #include "navd/device_sources.h"
 #include "navd/lcm_url.h"
 #include "navd/link_publisher.h"
-#include "navd/solution_board.h"
 #include "navd/publisher.h"
+#include "navd/solution_board.h"
 
 namespace nav::navd {
 namespace {
 
 constexpr std::size_t kQueueCapacity = 4096;
 constexpr const char* kLiveIdentity = "live";
+/// How long a stop waits for the device threads after the filter thread has saved its final
+/// checkpoint; threads still inside a device call then are abandoned and the process ends
+/// (issue 5 §1: stopped within 1 s even when a GigE camera hung or vanished).
+constexpr std::chrono::milliseconds kDeviceStopGrace{300};
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) {
@@ -57,8 +63,8 @@ LiveFilter make_live_filter(const daemon::NavdConfig& config, bool checkpoints) 
     spdlog::info("navd: resumed from {} ({} measurements applied)", resumed.path.string(),
                  resumed.point.applied);
   }
-  live.checkpointer = std::make_unique<daemon::NavFilterCheckpointer>(
-      config.checkpoint, resumed.point, kLiveIdentity);
+  live.checkpointer = std::make_unique<daemon::NavFilterCheckpointer>(config.checkpoint,
+                                                                      resumed.point, kLiveIdentity);
   return live;
 }
 
@@ -66,8 +72,7 @@ LiveFilter make_live_filter(const daemon::NavdConfig& config, bool checkpoints) 
 std::string filter_one(LiveFilter& live, const daemon::Measurement& m, LinkPublisher& links) {
   if (live.skipper && live.skipper->skip(m)) return {};
   if (core::Status s = live.slam->process(m); !s.ok()) {
-    return "SLAM filter at t = " + std::to_string(daemon::validity_us(m)) +
-           " us: " + s.to_string();
+    return "SLAM filter at t = " + std::to_string(daemon::validity_us(m)) + " us: " + s.to_string();
   }
   if (live.checkpointer) live.checkpointer->after_measurement(*live.slam, m);
   links.on_measurement(*live.slam);
@@ -115,6 +120,21 @@ int wait_for_end(const sigset_t& signals, const std::atomic<bool>& filter_done,
   return 0;
 }
 
+/// Ends the process with `code` without waiting for the device threads still inside a device
+/// call (destroying their objects under them is not an option): logs which, flushes, _Exit.
+[[noreturn]] void end_abandoning(const std::vector<std::string>& sensors, int code) {
+  std::string names;
+  for (const std::string& s : sensors) names += (names.empty() ? "" : ", ") + s;
+  spdlog::warn(
+      "navd: device thread(s) of {} still in a device call {} ms after stop (device hung or "
+      "gone); abandoned, exiting {} (final checkpoint already written)",
+      names, kDeviceStopGrace.count(), code);
+  spdlog::default_logger()->flush();
+  std::fflush(stdout);
+  std::fflush(stderr);
+  std::_Exit(code);
+}
+
 }  // namespace
 
 bool has_device_sensors(const daemon::NavdConfig& config) {
@@ -154,9 +174,10 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
   if (sig > 0) spdlog::info("navd: signal {}, stopping", sig);
   notifier.stopping();
   stop.store(true);
-  devices.join();
-  filter_thread.join();
+  const auto device_deadline = Clock::now() + kDeviceStopGrace;
+  filter_thread.join();  // writes the final checkpoint: never abandoned
   publisher_thread.join();
+  const std::vector<std::string> stuck = devices.join_until(device_deadline);
   const daemon::NavFilterCounters& counters = live.slam->counters();
   std::printf(
       "{\"mode\":\"live\",\"measurements\":%llu,\"images\":%zu,\"links\":%zu,"
@@ -165,11 +186,10 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
       live.slam->links().size(), device_threads,
       static_cast<unsigned long long>(queue.total_dropped()), seconds_since(start));
   std::fflush(stdout);
-  if (!failure.empty()) {
-    spdlog::error("navd: live filter: {}", failure);
-    return 1;
-  }
-  return 0;
+  const int code = failure.empty() ? 0 : 1;
+  if (!failure.empty()) spdlog::error("navd: live filter: {}", failure);
+  if (!stuck.empty()) end_abandoning(stuck, code);
+  return code;
 }
 
 }  // namespace nav::navd

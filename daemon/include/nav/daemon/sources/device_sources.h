@@ -9,7 +9,9 @@
 // objects, the queue (their producer) and their SensorHealth entry.
 
 #include <atomic>
+#include <chrono>
 #include <memory>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -39,6 +41,13 @@ class DeviceSources {
   /// Starts one thread per sensor with a device; returns how many.
   std::size_t start(const std::atomic<bool>& stop);
   void join();
+  /// Joins the threads that return by `deadline` (stop must have been set) and detaches the
+  /// others, whose sensor names it returns: a thread stuck in a device call that cannot be
+  /// interrupted (an Aravis GVCP transaction to a vanished or hung GigE camera blocks 2.5-5 s,
+  /// several in a row at stop: daemon/src/navd/README.md). After a non-empty return this object,
+  /// the queue, the LCM and the health board must stay alive until the process ends: the caller
+  /// ends it (navd: std::_Exit after its final checkpoint and log lines).
+  std::vector<std::string> join_until(std::chrono::steady_clock::time_point deadline);
   std::size_t size() const { return threads_.size(); }
   const LcmRawPublisher& publisher() const { return publisher_; }
 
