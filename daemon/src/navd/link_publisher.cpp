@@ -1,5 +1,6 @@
 #include "navd/link_publisher.h"
 
+#include <Eigen/Cholesky>
 #include <cstdio>
 #include <lcm/lcm-cpp.hpp>
 #include <navlcm/bounds_snapshot_t.hpp>
@@ -115,6 +116,15 @@ void LinkPublisher::publish_snapshot(const daemon::NavFilter& filter) {
   }
 }
 
+std::optional<core::Mat12> robot_only_covariance(const core::Esdf& esdf) {
+  if (esdf.num_blocks() != 1 || esdf.block_dim() != 12) return std::nullopt;
+  const core::Mat12 lambda = esdf.information().diagonal_block(core::Esdf::kRobotBlock);
+  const Eigen::LLT<core::Mat12> llt(lambda);
+  if (llt.info() != Eigen::Success) return std::nullopt;
+  const core::Mat12 sigma = llt.solve(core::Mat12::Identity());
+  return core::Mat12(0.5 * (sigma + sigma.transpose()));
+}
+
 void LinkPublisher::update_board(const daemon::NavFilter& filter) {
   if (!filter.initialised()) return;
   const core::Vec12 robot = filter.esdf().mean_block(core::Esdf::kRobotBlock);
@@ -125,10 +135,13 @@ void LinkPublisher::update_board(const daemon::NavFilter& filter) {
                 static_cast<unsigned long long>(c.images),
                 static_cast<unsigned long long>(c.links_accepted),
                 static_cast<unsigned long long>(c.links_gated));
+  const std::optional<core::Mat12> robot_only = robot_only_covariance(filter.esdf());
   board_.modify([&](SolutionView& v) {
     v.time_of_validity_us = filter.time_us();
     v.robot_mean = robot;
-    if (!images.empty()) {
+    if (robot_only) {
+      v.robot_covariance = *robot_only;  // no delayed state yet: Σ_rr = Λ_rr⁻¹ exactly
+    } else if (!images.empty()) {
       v.robot_covariance = images.back().robot_covariance;
       v.cg_relative_residual = images.back().relative_residual;
     }

@@ -17,6 +17,8 @@ namespace nav::navd {
 struct SolutionView {
   std::int64_t time_of_validity_us = 0;
   core::Vec12 robot_mean = core::Vec12::Zero();
+  /// The robot's marginal (LinkPublisher::update_board); the identity only as a placeholder
+  /// before the first estimate, never published (has_estimate false).
   core::Mat12 robot_covariance = core::Mat12::Identity();
   int num_delayed_states = 0;
   int num_camera_links = 0;
