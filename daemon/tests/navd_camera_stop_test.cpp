@@ -43,11 +43,7 @@ constexpr auto kStopBound = 2s;
 // Before any thread: the fake camera and navd inherit the namespace.
 const nav::tool::test::NetNamespace& kNet = nav::tool::test::isolated_network();
 
-fs::path sim_yaml() {
-  const fs::path rel = "config/sim.yaml";
-  const auto beside = fs::path(__FILE__).parent_path().parent_path().parent_path();
-  return fs::exists(beside / rel) ? beside / rel : rel;
-}
+fs::path sim_yaml() { return fs::path(NAV_SOURCE_DIR) / "config/sim.yaml"; }
 
 /// The fake camera's absolute path from PATH, or "".
 std::string find_in_path(const std::string& name) {
