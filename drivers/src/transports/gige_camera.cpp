@@ -86,6 +86,7 @@ IoStatus GigeCamera::open() {
   if (camera_ == nullptr)
     return take_error(error, name_, "camera not found", IoCode::kDisconnected);
   control_lost_.store(false);
+  control_silent_ = false;
   control_lost_handler_ = g_signal_connect(arv_camera_get_device(camera_), "control-lost",
                                            G_CALLBACK(&GigeCamera::on_control_lost), this);
   IoStatus s = configure();
@@ -187,9 +188,11 @@ IoStatus GigeCamera::start() {
 void GigeCamera::stop() {
   if (!streaming_) return;
   streaming_ = false;
-  GError* error = nullptr;
-  arv_camera_stop_acquisition(camera_, &error);  // may fail if the camera is gone: nothing to do
-  g_clear_error(&error);
+  if (!control_lost_.load() && !control_silent_) {
+    GError* error = nullptr;
+    arv_camera_stop_acquisition(camera_, &error);  // may fail if the camera is gone: nothing to do
+    g_clear_error(&error);
+  }  // else a vanished or hung device: the command would only wait out its retries
   if (stream_ != nullptr) {
     guint64 completed = 0, failures = 0, underruns = 0;
     arv_stream_get_statistics(stream_, &completed, &failures, &underruns);
@@ -207,7 +210,10 @@ IoStatus GigeCamera::trigger() {
   }
   GError* error = nullptr;
   arv_camera_software_trigger(camera_, &error);
-  return take_error(error, name_, "software trigger", IoCode::kSystemError);
+  control_silent_ =
+      error != nullptr && g_error_matches(error, ARV_DEVICE_ERROR, ARV_DEVICE_ERROR_TIMEOUT);
+  return take_error(error, name_, "software trigger",
+                    control_silent_ ? IoCode::kTimeout : IoCode::kSystemError);
 }
 
 CameraStats GigeCamera::stats() const {

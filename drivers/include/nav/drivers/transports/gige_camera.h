@@ -75,6 +75,8 @@ class GigeCamera final : public Camera {
   /// is neither an IP address nor already in Aravis' device list. kDisconnected if it is not
   /// found, kUnsupported if it lacks the pixel format or a feature, with Aravis' message.
   IoStatus open();
+  /// Releases the camera. Unref of the stream and device still waits for Aravis' GVCP retries
+  /// (about 2.5 s each) when the camera vanished or hung.
   void close();
 
   IoStatus start() override;
@@ -103,6 +105,9 @@ class GigeCamera final : public Camera {
   _ArvStream* stream_ = nullptr;
   unsigned long control_lost_handler_ = 0;
   std::atomic<bool> control_lost_{false};
+  /// The last control command (software trigger) timed out: the device does not answer GVCP,
+  /// so stop() does not send AcquisitionStop (another 5 x 500 ms+ of retries; measured 4.9 s).
+  bool control_silent_ = false;
   bool streaming_ = false;
   std::size_t payload_bytes_ = 0;  ///< size of each stream buffer we allocated
   int width_ = 0;
