@@ -21,8 +21,8 @@
 #include "navd/device_sources.h"
 #include "navd/lcm_url.h"
 #include "navd/link_publisher.h"
-#include "navd/publisher.h"
 #include "navd/solution_board.h"
+#include "navd/publisher.h"
 
 namespace nav::navd {
 namespace {
@@ -63,8 +63,8 @@ LiveFilter make_live_filter(const daemon::NavdConfig& config, bool checkpoints) 
     spdlog::info("navd: resumed from {} ({} measurements applied)", resumed.path.string(),
                  resumed.point.applied);
   }
-  live.checkpointer = std::make_unique<daemon::NavFilterCheckpointer>(config.checkpoint,
-                                                                      resumed.point, kLiveIdentity);
+  live.checkpointer = std::make_unique<daemon::NavFilterCheckpointer>(
+      config.checkpoint, resumed.point, kLiveIdentity);
   return live;
 }
 
@@ -72,7 +72,8 @@ LiveFilter make_live_filter(const daemon::NavdConfig& config, bool checkpoints) 
 std::string filter_one(LiveFilter& live, const daemon::Measurement& m, LinkPublisher& links) {
   if (live.skipper && live.skipper->skip(m)) return {};
   if (core::Status s = live.slam->process(m); !s.ok()) {
-    return "SLAM filter at t = " + std::to_string(daemon::validity_us(m)) + " us: " + s.to_string();
+    return "SLAM filter at t = " + std::to_string(daemon::validity_us(m)) +
+           " us: " + s.to_string();
   }
   if (live.checkpointer) live.checkpointer->after_measurement(*live.slam, m);
   links.on_measurement(*live.slam);
