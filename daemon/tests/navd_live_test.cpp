@@ -11,6 +11,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <Eigen/Cholesky>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -133,10 +134,10 @@ int wait_exit(pid_t pid, std::chrono::milliseconds timeout) {
 
 struct Solutions {
   int count = 0;
-  navlcm::nav_solution_t last{};
+  navlcm::nav_solution_t first{}, last{};
   void on(const lcm::ReceiveBuffer*, const std::string&, const navlcm::nav_solution_t* m) {
     if (m->filter_status == 2) return;  // initialising
-    ++count;
+    if (count++ == 0) first = *m;
     last = *m;
   }
 };
@@ -183,6 +184,15 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
   EXPECT_NEAR(got.last.rph_rad[2], kHeadingDeg * M_PI / 180.0, 0.01);
   EXPECT_NEAR(got.last.p_world_m[2], 10.0, 0.5);
   EXPECT_NEAR(got.last.p_world_m[0], 0.0, 0.5);  // no velocity sensor: it stays at the origin
+  // Issue 5 §2: the first solution (no image yet) carries the robot's marginal (Λ_rr⁻¹), not
+  // an identity placeholder: symmetric positive definite, heading and depth at the size of
+  // the filter's prior (10 x the sensor sigmas) or tighter.
+  const Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> P(got.first.pose_covariance);
+  EXPECT_LE((P - P.transpose()).norm(), 1e-12 * P.norm()) << P;
+  const Eigen::LLT<Eigen::Matrix<double, 6, 6>> cholesky(P);
+  EXPECT_EQ(cholesky.info(), Eigen::Success) << P;
+  EXPECT_LT(std::sqrt(P(5, 5)), 2.0 * M_PI / 180.0) << P;  // heading sigma
+  EXPECT_LT(std::sqrt(P(2, 2)), 0.5) << P;                 // depth sigma
 }
 
 }  // namespace
