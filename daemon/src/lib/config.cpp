@@ -31,7 +31,8 @@ core::Vec3 read_psd(const YamlReader& r) {
 
 FilterConfig parse_filter(const YamlReader& f) {
   f.expect_map({"process_noise_psd", "cg_iterations_per_step", "latency_window_ms",
-                "gating_chi2_threshold", "recovery_thread", "recovery_handoff_s"});
+                "gating_chi2_threshold", "recovery_thread", "recovery_handoff_s",
+                "registration_wait_s", "max_pending_registrations"});
   FilterConfig filter;
   if (f.has("process_noise_psd")) {
     const YamlReader p = f.at("process_noise_psd");
@@ -46,6 +47,8 @@ FilterConfig parse_filter(const YamlReader& f) {
   f.read("gating_chi2_threshold", filter.gating_chi2_threshold, 1e-6, 1e6);
   if (f.has("recovery_thread")) filter.recovery_thread = f.at("recovery_thread").as_bool();
   f.read("recovery_handoff_s", filter.recovery_handoff_s, 0.0, 3600.0);
+  f.read("registration_wait_s", filter.registration_wait_s, 0.0, 3600.0);
+  f.read("max_pending_registrations", filter.max_pending_registrations, 1, 100000);
   return filter;
 }
 
@@ -67,12 +70,15 @@ LcmConfig parse_lcm(const YamlReader& l) {
   if (!known) l.at("url").fail("'" + lcm.url + "' must start with udpm://, file:// or memq://");
   if (l.has("channels")) {
     const YamlReader c = l.at("channels");
-    c.expect_map({"nav_solution", "health", "bounds", "bounds_snapshot", "camera_links"});
+    c.expect_map({"nav_solution", "health", "bounds", "bounds_snapshot", "camera_links",
+                  "registration", "link_proposals"});
     parse_channel(c, "nav_solution", lcm.nav_solution);
     parse_channel(c, "health", lcm.health);
     parse_channel(c, "bounds", lcm.bounds);
     parse_channel(c, "bounds_snapshot", lcm.bounds_snapshot);
     parse_channel(c, "camera_links", lcm.camera_links);
+    parse_channel(c, "registration", lcm.registration);
+    parse_channel(c, "link_proposals", lcm.link_proposals);
   }
   return lcm;
 }

@@ -47,6 +47,8 @@ NavFilterOptions NavFilterOptions::from_config(const NavdConfig& config) {
   o.camera_gate_chi2 = equivalent_chi_square_gate(config.filter.gating_chi2_threshold, 6, 5);
   o.recovery_thread = config.filter.recovery_thread;
   o.recovery_handoff_s = config.filter.recovery_handoff_s;
+  o.registration_wait_s = config.filter.registration_wait_s;
+  o.max_pending_registrations = config.filter.max_pending_registrations;
   return o;
 }
 
@@ -82,6 +84,16 @@ NavFilter::NavFilter(const NavdConfig& config, const RegistrationTable* registra
     throw std::invalid_argument("NavFilterOptions: recovery_handoff_s must be in [0, 3600] s, is " +
                                 std::to_string(options_.recovery_handoff_s));
   }
+  if (!(options_.registration_wait_s >= 0.0 && options_.registration_wait_s <= 3600.0) ||
+      options_.max_pending_registrations < 1 || options_.max_pending_registrations > 100000) {
+    throw std::invalid_argument(
+        "NavFilterOptions: registration_wait_s must be in [0, 3600] s (is " +
+        std::to_string(options_.registration_wait_s) + "), max_pending_registrations in [1, " +
+        "100000] (is " + std::to_string(options_.max_pending_registrations) + ")");
+  }
+  if (options_.registration_wait_s > 0.0) {
+    pending_.reserve(static_cast<std::size_t>(options_.max_pending_registrations));
+  }
   if (options_.recovery_thread) {
     // The job's iterate is certified by the filter on its current Λ at the next image (true
     // residual there), so the job skips its own final residual product.
@@ -109,6 +121,7 @@ core::Status NavFilter::process(const Measurement& m) {
     return core::Status::Ok();
   }
   last_validity_us_ = t_us;
+  now_realtime_us_ = time_of(m).host_realtime_us;
   // The recovery thread's result is taken at a data time (nav_filter.h "Recovery thread").
   if (recovery_in_flight() && t_us >= handoff_us_) take_recovery_result();
   // Measurements less than min_predict_step_s after the filter's time are applied at that time
@@ -117,6 +130,7 @@ core::Status NavFilter::process(const Measurement& m) {
   if (t_us - time_us_ >= min_step_us) {
     if (core::Status s = advance_to(t_us); !s.ok()) return s;
   }
+  resolve_pending(now_realtime_us_);  // asynchronous registrations (nav_filter_pending.cpp)
   if (const auto* image = std::get_if<ImageEvent>(&m)) return on_image(*image);
   update_robot(m);
   return core::Status::Ok();
@@ -347,6 +361,8 @@ core::Status NavFilter::on_image(const ImageEvent& image) {
 
 core::Status NavFilter::finish() {
   if (recovery_in_flight()) take_recovery_result();
+  for (Pending& p : pending_) finish_pending(p, nullptr);  // never answered
+  pending_.clear();
   if (!initialised_ || pending_image_ < 0) return core::Status::Ok();
   const std::int64_t step_us = 100'000;  // 0.1 s: keeps the last image's state
   if (core::Status s = predict_once(1e-6 * static_cast<double>(step_us)); !s.ok()) return s;

@@ -66,6 +66,7 @@ void NavFilter::propose_and_link(ImageRecord& current) {
   }
   summary.proposed = static_cast<int>(scratch_proposals_.size());
   for (const Proposal& p : scratch_proposals_) {
+    if (defer_link(p, current)) continue;  // answered later (nav_filter_pending.cpp)
     LinkRecord link = try_link(p, current);
     if (link.outcome == LinkOutcome::kAccepted) ++summary.accepted;
     pending_links_.push_back(links_.size());
@@ -93,28 +94,36 @@ LinkRecord NavFilter::try_link(const Proposal& p, const ImageRecord& current) {
     ++counters_.not_registered;
     return link;
   }
-  link.is_outlier = reg->is_outlier;
-  if (!reg->success) {
+  resolve_link(p.joint, core::Esdf::kRobotBlock, *reg, link);
+  return link;
+}
+
+void NavFilter::resolve_link(const core::LinkProposal& joint, int block_j,
+                             const RegistrationResult& reg, LinkRecord& link) {
+  const int block = joint.state;
+  link.is_outlier = reg.is_outlier;
+  if (!reg.success) {
     link.outcome = LinkOutcome::kRegistrationFailed;
     ++counters_.registration_failed;
-    return link;
+    return;
   }
-  link.z = reg->z;
-  link.covariance = reg->covariance;
-  // Gate (nav_filter.h): ν = z − h(μ_i, μ_r), S = H J Hᵀ + R with H = [H_r H_i].
+  link.z = reg.z;
+  link.covariance = reg.covariance;
+  // Gate (nav_filter.h): ν = z − h(μ_i, μ_j), S = H J Hᵀ + R with H = [H_j H_i] (j: the robot
+  // at the image, or its delayed state for a deferred link).
   const core::CameraRelativePoseModel& camera = *sensors_.camera();
   const auto& x_i = filter_.mean_block(block);
-  const auto& x_r = filter_.mean_block(core::Esdf::kRobotBlock);
+  const auto& x_r = filter_.mean_block(block_j);
   link.outcome = LinkOutcome::kGated;
   core::MeasJac H_i, H_r;
   core::MeasVec nu;
   if (!camera.baseline_is_degenerate(x_i, x_r)) {
     try {
-      nu = reg->z - camera.predict(x_i, x_r, &H_i, &H_r);
+      nu = reg.z - camera.predict(x_i, x_r, &H_i, &H_r);
       for (int row = 0; row < 5; ++row) nu(row) = core::wrap_angle(nu(row));
       Eigen::Matrix<double, 5, 2 * kD> H;
       H << H_r, H_i;
-      const Eigen::Matrix<double, 5, 5> S = H * gate_joint(p.joint) * H.transpose() + reg->covariance;
+      const Eigen::Matrix<double, 5, 5> S = H * gate_joint(joint) * H.transpose() + reg.covariance;
       const Eigen::LDLT<Eigen::Matrix<double, 5, 5>> ldlt(S);
       const Eigen::Matrix<double, 5, 1> v = nu;
       link.innovation = v;
@@ -129,13 +138,13 @@ LinkRecord NavFilter::try_link(const Proposal& p, const ImageRecord& current) {
     }
   }
   if (link.outcome == LinkOutcome::kAccepted) {
-    const core::MeasCov R = reg->covariance;
-    const core::MeasVec z = reg->z;
-    if (core::Status s = filter_.update(camera, block, core::Esdf::kRobotBlock, z, R); !s.ok()) {
+    const core::MeasCov R = reg.covariance;
+    const core::MeasVec z = reg.z;
+    if (core::Status s = filter_.update(camera, block, block_j, z, R); !s.ok()) {
       spdlog::warn("NavFilter: camera link {}-{} rejected by the filter: {}", link.frame_i,
                    link.frame_j, s.to_string());
       link.outcome = LinkOutcome::kGated;
-    } else if (!bounds_.update(p.joint, H_r, H_i, R).ok()) {
+    } else if (block_j == core::Esdf::kRobotBlock && !bounds_.update(joint, H_r, H_i, R).ok()) {
       ++counters_.bound_update_failures;
     }
   }
@@ -146,7 +155,6 @@ LinkRecord NavFilter::try_link(const Proposal& p, const ImageRecord& current) {
     ++counters_.links_gated;
     if (link.is_outlier) ++counters_.outliers_rejected;
   }
-  return link;
 }
 
 }  // namespace nav::daemon

@@ -6,7 +6,7 @@
 
 namespace nav::daemon {
 
-void RegistrationTable::insert(const navlcm::registration_t& r) {
+bool RegistrationTable::insert(const navlcm::registration_t& r) {
   RegistrationResult result;
   result.success = r.success;
   for (int k = 0; k < 5; ++k) result.z(k) = r.measurement[k];
@@ -19,7 +19,9 @@ void RegistrationTable::insert(const navlcm::registration_t& r) {
                                 ") must be smaller than frame_id_j (" +
                                 std::to_string(r.frame_id_j) + ")");
   }
-  results_[{r.frame_id_i, r.frame_id_j}] = result;
+  if (!results_.emplace(std::make_pair(r.frame_id_i, r.frame_id_j), result).second) return false;
+  ++generation_;
+  return true;
 }
 
 std::optional<RegistrationResult> RegistrationTable::find(std::int64_t a, std::int64_t b) const {

@@ -23,11 +23,13 @@
 #include "navd/link_publisher.h"
 #include "navd/solution_board.h"
 #include "navd/publisher.h"
+#include "navd/registration_listener.h"
 
 namespace nav::navd {
 namespace {
 
 constexpr std::size_t kQueueCapacity = 4096;
+constexpr std::size_t kRegistrationCapacity = 1024;  ///< registrations queued for the filter
 constexpr const char* kLiveIdentity = "live";
 /// How long a stop waits for the device threads after the filter thread has saved its final
 /// checkpoint; threads still inside a device call then are abandoned and the process ends
@@ -41,6 +43,9 @@ double seconds_since(Clock::time_point start) {
 
 /// The SLAM filter of the live mode, resumed from a checkpoint when asked.
 struct LiveFilter {
+  /// The vision stage's answers (registration_listener.h); declared first: outlives `slam`.
+  std::unique_ptr<daemon::RegistrationInbox> inbox;
+  std::unique_ptr<LinkProposalPublisher> proposals;
   std::unique_ptr<daemon::NavFilter> slam;
   std::optional<daemon::ResumeSkipper> skipper;
   std::unique_ptr<daemon::NavFilterCheckpointer> checkpointer;
@@ -48,8 +53,11 @@ struct LiveFilter {
 
 LiveFilter make_live_filter(const daemon::NavdConfig& config, bool checkpoints) {
   const daemon::NavFilterOptions options = daemon::NavFilterOptions::from_config(config);
-  auto make = [&] { return std::make_unique<daemon::NavFilter>(config, nullptr, options); };
   LiveFilter live;
+  live.inbox = std::make_unique<daemon::RegistrationInbox>(kRegistrationCapacity);
+  live.proposals = std::make_unique<LinkProposalPublisher>(config);
+  const daemon::RegistrationTable* table = &live.inbox->table();
+  auto make = [&] { return std::make_unique<daemon::NavFilter>(config, table, options); };
   live.slam = make();
   if (!checkpoints) return live;
   daemon::ResumedNavFilter resumed =
@@ -77,6 +85,7 @@ std::string filter_one(LiveFilter& live, const daemon::Measurement& m, LinkPubli
   }
   if (live.checkpointer) live.checkpointer->after_measurement(*live.slam, m);
   links.on_measurement(*live.slam);
+  live.proposals->on_measurement(*live.slam);
   return {};
 }
 
@@ -93,6 +102,7 @@ std::string filter_loop(const daemon::NavdConfig& config, daemon::MeasurementQue
     batch.clear();
     queue.pop_bulk(batch, 256);
     for (const daemon::Measurement& m : batch) ordering.insert(m);
+    live.inbox->drain();  // registrations before the measurements they may answer
     while (std::optional<daemon::Measurement> m = ordering.pop_ready()) {
       if (std::string error = filter_one(live, *m, links); !error.empty()) return error;
     }
@@ -155,6 +165,12 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
   LinkPublisher links(config.lcm, board);
   NavdDevices devices(config, queue);
   devices.attach(publisher);
+  RegistrationListener registrations(config.lcm, *live.inbox);
+  if (config.filter.registration_wait_s <= 0.0) {
+    spdlog::warn(
+        "navd: filter.registration_wait_s is 0: proposed pairs do not wait for the "
+        "vision stage, so live mode accepts no camera link (config/README.md)");
+  }
 
   std::atomic<bool> stop{false}, filter_done{false};
   std::string failure;
@@ -168,6 +184,7 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
     filter_done.store(true);
   });
   std::thread publisher_thread([&] { publisher.run(stop); });
+  registrations.start(stop);
   const std::size_t device_threads = devices.start(stop);
   spdlog::info("navd: live on {} device threads ({})", device_threads, args.config_path);
   notifier.ready_with_status("live: " + std::to_string(device_threads) + " devices");
@@ -178,14 +195,16 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
   const auto device_deadline = Clock::now() + kDeviceStopGrace;
   filter_thread.join();  // writes the final checkpoint: never abandoned
   publisher_thread.join();
+  registrations.join();
   const std::vector<std::string> stuck = devices.join_until(device_deadline);
   const daemon::NavFilterCounters& counters = live.slam->counters();
   std::printf(
       "{\"mode\":\"live\",\"measurements\":%llu,\"images\":%zu,\"links\":%zu,"
-      "\"devices\":%zu,\"queue_dropped\":%llu,\"wall_s\":%.3f}\n",
+      "\"devices\":%zu,\"queue_dropped\":%llu,\"wall_s\":%.3f%s}\n",
       static_cast<unsigned long long>(counters.measurements), live.slam->images().size(),
       live.slam->links().size(), device_threads,
-      static_cast<unsigned long long>(queue.total_dropped()), seconds_since(start));
+      static_cast<unsigned long long>(queue.total_dropped()), seconds_since(start),
+      registration_summary_json(*live.inbox, *live.slam).c_str());
   std::fflush(stdout);
   const int code = failure.empty() ? 0 : 1;
   if (!failure.empty()) spdlog::error("navd: live filter: {}", failure);

@@ -40,6 +40,9 @@ struct SyntheticDiveOptions {
 struct SyntheticDive {
   std::vector<daemon::Measurement> measurements;  ///< time-ordered
   daemon::RegistrationTable registrations;
+  /// The same registrations, utime = image j's time.
+  std::vector<navlcm::registration_t> registration_messages;
+  std::vector<std::int64_t> image_t_us;  ///< per frame id
   std::vector<core::Vec12> image_truth;  ///< per frame id
   core::Vec12 final_truth = core::Vec12::Zero();
   int registrations_succeeded = 0;
@@ -175,8 +178,10 @@ inline SyntheticDive make_synthetic_dive(const daemon::NavdConfig& config,
       reg.overlap_fraction = 1.0 - (c_i.head<2>() - c_j.head<2>()).norm() / (2.0 * r_fp);
       if (reg.success) ++dive.registrations_succeeded;
       dive.registrations.insert(reg);
+      dive.registration_messages.push_back(reg);
     }
   }
+  dive.image_t_us = image_t_us;
   return dive;
 }
 

@@ -140,6 +140,12 @@ struct FilterConfig {
   /// thread's result, s, [0, 3600] (nav_filter.h "Recovery thread"; the next image takes it
   /// earlier: 10 s is past sim.yaml's 8 s image period, so replays overlap a whole period).
   double recovery_handoff_s = 10.0;
+  /// How long a proposed pair waits for an asynchronous registration after its image's
+  /// receive time, s, [0, 3600] (nav_filter.h "Asynchronous registrations"); 0: the
+  /// registration table is complete when the image is processed (replay of a dive log).
+  /// The live mode needs > 0 (its vision stage answers after the image).
+  double registration_wait_s = 0.0;
+  int max_pending_registrations = 256;  ///< bound on the waiting pairs, [1, 100000]
 };
 
 struct LcmChannel {
@@ -154,6 +160,10 @@ struct LcmConfig {
   LcmChannel bounds_snapshot{"NAVD_BOUNDS_SNAPSHOT", 0.2};  ///< bounds_snapshot_t at rate_hz
   LcmChannel camera_links{"NAVD_CAMERA_LINKS", 1.0};  ///< camera_link_t per proposed pair
                                                        ///< (event-driven; rate_hz unused)
+  /// registration_t navd's live mode subscribes to (the vision stage's answers; rate unused).
+  LcmChannel registration{"NAV_REGISTRATION", 1.0};
+  /// link_proposal_t per pair waiting for its registration (event-driven; rate unused).
+  LcmChannel link_proposals{"NAV_LINK_PROPOSAL", 1.0};
 };
 
 struct CheckpointConfig {

@@ -26,17 +26,22 @@ struct RegistrationResult {
 
 class RegistrationTable {
  public:
-  /// Adds or replaces the result for (frame_id_i, frame_id_j). Requires frame_id_i <
-  /// frame_id_j (the measurement is always camera i -> camera j, earlier to later); throws
-  /// std::invalid_argument naming both ids otherwise.
-  void insert(const navlcm::registration_t& registration);
+  /// Adds the result for (frame_id_i, frame_id_j); false (the table unchanged) when the pair
+  /// is already registered: the first answer is kept, so a link applied from it is never
+  /// contradicted or applied twice. Requires frame_id_i < frame_id_j (the measurement is
+  /// always camera i -> camera j, earlier to later); throws std::invalid_argument naming both
+  /// ids otherwise.
+  bool insert(const navlcm::registration_t& registration);
   /// The result for the pair given in either order (its measurement is always from the smaller
   /// frame id to the larger), or nullopt if it was never registered.
   std::optional<RegistrationResult> find(std::int64_t frame_a, std::int64_t frame_b) const;
   std::size_t size() const { return results_.size(); }
   std::size_t outliers() const;
+  /// Incremented by every insert that adds a result (lets a reader notice new entries).
+  std::uint64_t generation() const { return generation_; }
 
  private:
+  std::uint64_t generation_ = 0;
   std::map<std::pair<std::int64_t, std::int64_t>, RegistrationResult> results_;
 };
 

@@ -41,6 +41,25 @@
 //   (CameraRelativePoseModel with the camera mount, robot <-> i) and tighten Σ~_ii (bounds
 //   update, constant time). The robot is kept as this image's delayed state by the next
 //   prediction (Esdf::predict keep_current), with its links; finish() keeps a pending one.
+// * Asynchronous registrations (options.registration_wait_s > 0, filter.registration_wait_s;
+//   nav_filter_pending.cpp): the vision stage answers a proposed pair later than the image. A
+//   pair whose registration is not in the table with available_us (its utime, host
+//   CLOCK_REALTIME) <= the current measurement's host_realtime_us is kept pending (at most
+//   max_pending_registrations; more are not_registered at once, counted) with its proposal
+//   joint. Before every later measurement (after its prediction) each pending pair whose
+//   registration is now available (available_us <= that measurement's host_realtime_us) is
+//   gated and applied as a link between the two delayed states (Esdf binary update; the gate
+//   uses the stored proposal joint, an upper bound of the current joint since information
+//   only grows); one not answered within registration_wait_s of its image's receive time is
+//   not_registered. Its links.csv row is appended then (t_us = the filter's time). Deferred
+//   links do not tighten Σ~_ii (the stored joint's robot part is no longer the robot's bound;
+//   an untightened bound stays conservative). Because availability is judged by the
+//   registrations' utime against the measurements' receive times, a table filled before the
+//   replay and one filled while it runs (live mode) give the same links when every
+//   registration is inserted before the first measurement received at or after its utime.
+//   Pending pairs are not checkpointed (a resumed filter forgets them); finish() expires them.
+//   registration_wait_s = 0 (default): the table is complete (a dive log's oracle
+//   registrations): looked up at the image regardless of available_us, as before.
 // * Recovery thread (options.recovery_thread, filter.recovery_thread; opt-in, measured in README
 //   "Recovery thread"):
 //   the PCG iterations move to a RecoveryWorker (recovery_worker.h). At image k the filter
@@ -132,6 +151,11 @@ struct NavFilterOptions {
   /// With recovery_thread: run each job on the filter thread at its hand-off instead of on a
   /// thread (bit-identical outputs, for checking the thread).
   bool recovery_inline = false;
+  /// Asynchronous registrations (file comment): how long after an image's receive time a
+  /// proposed pair waits for its registration, s, [0, 3600]; 0: no waiting (complete table).
+  double registration_wait_s = 0.0;
+  /// Bound on the pending pairs (storage reserved at construction), [1, 100000].
+  int max_pending_registrations = 256;
   /// Tests: runs on the recovery thread before each job (e.g. sleeps).
   std::function<void()> recovery_test_hook;
 
@@ -156,6 +180,23 @@ struct LinkRecord {  ///< one proposed pair (links.csv)
   Eigen::Matrix<double, 5, 1> z = Eigen::Matrix<double, 5, 1>::Zero();
   Eigen::Matrix<double, 5, 5> covariance = Eigen::Matrix<double, 5, 5>::Zero();
   Eigen::Matrix<double, 5, 1> innovation = Eigen::Matrix<double, 5, 1>::Zero();
+};
+
+/// A proposed pair waiting for its registration (file comment "Asynchronous registrations").
+struct PendingRegistration {
+  std::uint64_t sequence = 0;              ///< 1, 2, ... in proposal order
+  std::uint64_t frame_i = 0, frame_j = 0;  ///< earlier, later image
+  std::int64_t t_i_us = 0, t_j_us = 0;     ///< their times of validity
+  std::int64_t asked_realtime_us = 0;      ///< image j's host_realtime_us
+  std::int64_t deadline_realtime_us = 0;   ///< asked + registration_wait_s
+};
+
+struct PendingRegistrationCounters {
+  std::uint64_t deferred = 0;      ///< pairs that waited for their registration
+  std::uint64_t applied = 0;       ///< registration arrived in time (gated, maybe accepted)
+  std::uint64_t accepted = 0;      ///< of applied: accepted links
+  std::uint64_t expired = 0;       ///< no registration within the wait (or at finish())
+  std::uint64_t dropped_full = 0;  ///< not deferred: max_pending_registrations reached
 };
 
 struct ProposalRecord {  ///< one image (proposals.csv)
@@ -217,6 +258,11 @@ class NavFilter {
   const std::vector<ImageRecord>& images() const { return images_; }
   const std::vector<LinkRecord>& links() const { return links_; }
   const std::vector<ProposalRecord>& proposals() const { return proposals_; }
+  /// Pairs waiting for their registration, in proposal order (not checkpointed).
+  std::vector<PendingRegistration> pending_registrations() const;
+  /// Sequence number of the newest deferred pair (0: none yet).
+  std::uint64_t last_pending_sequence() const { return pending_sequence_; }
+  const PendingRegistrationCounters& pending_counters() const { return pending_counters_; }
   /// Image record of delayed-state block `block`, or nullptr (robot / unknown).
   const ImageRecord* image_of_state(int block) const;
 
@@ -251,6 +297,22 @@ class NavFilter {
   bool is_candidate(const ImageRecord& earlier, const ImageRecord& current, int block,
                     core::LinkProposal* joint) const;
   LinkRecord try_link(const Proposal& p, const ImageRecord& current);
+  /// Gates a registered pair (earlier block p.state, later block `block_j`) and applies it.
+  void resolve_link(const core::LinkProposal& joint, int block_j, const RegistrationResult& reg,
+                    LinkRecord& link);
+  // Asynchronous registrations (nav_filter_pending.cpp).
+  struct Pending {
+    PendingRegistration info;
+    core::LinkProposal joint;
+    std::size_t image_j = 0;   ///< index into images_
+    std::size_t proposal = 0;  ///< index into proposals_
+  };
+  /// True when the pair is kept waiting for its registration (not looked up now).
+  bool defer_link(const Proposal& p, const ImageRecord& current);
+  /// Applies the pending pairs whose registration is available at `realtime_us`, expires the
+  /// overdue ones.
+  void resolve_pending(std::int64_t realtime_us);
+  void finish_pending(Pending& pending, const RegistrationResult* reg);
   double footprint_radius_m(double altitude_m) const;
 
   NavFilterOptions options_;
@@ -291,6 +353,12 @@ class NavFilter {
   std::vector<LinkRecord> links_;
   std::vector<ProposalRecord> proposals_;
   std::vector<Proposal> scratch_proposals_;
+  std::int64_t now_realtime_us_ = 0;  ///< host_realtime_us of the measurement in process()
+  std::vector<Pending> pending_;      ///< capacity max_pending_registrations
+  std::uint64_t pending_sequence_ = 0;
+  std::uint64_t pending_seen_generation_ = 0;  ///< registrations_->generation() at last scan
+  std::int64_t pending_next_check_us_ = 0;     ///< earliest availability / deadline pending
+  PendingRegistrationCounters pending_counters_;
   NavFilterCounters counters_;
   SensorInnovationStats innovations_;
 };

@@ -1,0 +1,59 @@
+#pragma once
+// Registrations arriving while navd runs (live mode: the vision stage's registration_t on LCM)
+// on their way to the filter thread, which owns the RegistrationTable the NavFilter reads.
+//
+// Contract:
+// * offer() is called by ONE producer thread (the LCM listener); it never blocks and never
+//   allocates: a bounded single-producer/single-consumer moodycamel::ReaderWriterQueue with
+//   `capacity` slots preallocated; an offer into a full queue is dropped and counted.
+// * drain() and table() belong to the filter thread (no locks in the filter path): drain()
+//   inserts what arrived into the table before the filter processes the next measurements.
+//   A pair already in the table keeps its first answer (counted `duplicates`); frame_id_i >=
+//   frame_id_j is counted `invalid` and logged (never thrown into the filter thread).
+// * A registration for a pair the filter never proposes just stays in the table (`unknown` to
+//   the filter: nav_filter.h "Asynchronous registrations").
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <navlcm/registration_t.hpp>
+
+#include "nav/daemon/registration_table.h"
+
+namespace nav::daemon {
+
+struct RegistrationInboxCounters {
+  std::uint64_t received = 0;    ///< offered and queued
+  std::uint64_t dropped = 0;     ///< offered while the queue was full
+  std::uint64_t inserted = 0;    ///< new pairs in the table
+  std::uint64_t duplicates = 0;  ///< pair already registered (first answer kept)
+  std::uint64_t invalid = 0;     ///< frame_id_i >= frame_id_j
+};
+
+class RegistrationInbox {
+ public:
+  /// `capacity` >= 1 queued registrations (std::invalid_argument otherwise).
+  explicit RegistrationInbox(std::size_t capacity);
+  ~RegistrationInbox();
+  RegistrationInbox(const RegistrationInbox&) = delete;
+  RegistrationInbox& operator=(const RegistrationInbox&) = delete;
+
+  /// Producer thread: queues one registration; false (counted) when full.
+  bool offer(const navlcm::registration_t& registration);
+  /// Filter thread: moves everything queued into the table; the number taken.
+  std::size_t drain();
+  /// Filter thread: the table the NavFilter reads (stable address for the inbox's lifetime).
+  const RegistrationTable& table() const { return table_; }
+  /// Any thread (received/dropped exact; the filter-side counts as of the last drain()).
+  RegistrationInboxCounters counters() const;
+
+ private:
+  struct Queue;
+  std::unique_ptr<Queue> queue_;
+  RegistrationTable table_;
+  std::atomic<std::uint64_t> received_{0}, dropped_{0};
+  std::atomic<std::uint64_t> inserted_{0}, duplicates_{0}, invalid_{0};
+};
+
+}  // namespace nav::daemon
