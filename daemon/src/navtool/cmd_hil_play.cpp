@@ -29,6 +29,7 @@ struct HilPlayArgs {
   std::string can_interface = "vcan0";
   std::string config_out;
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  bool play_registrations = false;
   bool no_wait = false;
   bool no_camera = false;
   bool hold = false;
@@ -74,6 +75,7 @@ nlohmann::json report_json(const hil::PlayReport& r) {
           {"host_start_us", r.host_start_us},
           {"images_not_played", r.images_not_played},
           {"registrations_not_played", r.registrations_not_played},
+          {"registrations_played", r.registrations_played},
           {"raw_unknown_sensor", r.raw_unknown_sensor}};
 }
 
@@ -104,6 +106,7 @@ void run_hil_play(const HilPlayArgs& args) {
   o.can_interface = args.can_interface;
   o.wait_for_readers = !args.no_wait;
   o.fake_gige_camera = !args.no_camera;
+  if (args.play_registrations) o.registration_lcm_url = args.lcm_url;
   o.reader_timeout = std::chrono::milliseconds(static_cast<long>(args.reader_timeout_s * 1e3));
   std::unique_ptr<hil::DivePlayer> player;
   std::string config_path = args.config_out;
@@ -160,6 +163,9 @@ void add_hil_play(CLI::App& app) {
   cmd->add_option("--lcm-url", args->lcm_url, "lcm.url of the written navd config");
   cmd->add_flag("--no-wait", args->no_wait,
                 "start at once instead of when every pty has a reader (navd opened them)");
+  cmd->add_flag("--play-registrations", args->play_registrations,
+                "publish the log's NAV_REGISTRATION on --lcm-url at their log times (only "
+                "meaningful when navd's images are the dive's frames)");
   cmd->add_flag("--no-camera", args->no_camera,
                 "do not serve camera_gige sensors with Aravis' fake GigE camera on lo");
   cmd->add_option("--reader-timeout-s", args->reader_timeout_s,

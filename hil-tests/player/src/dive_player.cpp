@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -44,6 +45,12 @@ void sleep_until_us(std::int64_t until_us, const std::atomic<bool>& stop) {
   }
 }
 
+std::int64_t realtime_now_us() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
+}
+
 std::string read_text(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path.string() + ": cannot read");
@@ -66,6 +73,9 @@ std::string PlayerOptions::validate() const {
   }
   if (can_interface.empty()) return "can_interface is empty";
   if (reader_timeout.count() < 0) return "reader_timeout is negative";
+  if (!registration_lcm_url.empty() && registration_channel.empty()) {
+    return "registration_channel is empty";
+  }
   return {};
 }
 
@@ -78,6 +88,7 @@ struct DivePlayer::Impl {
   std::map<std::size_t, std::unique_ptr<PtyLink>> ptys;  ///< by sensor index
   CanOutput can;
   FakeGigeCamera camera;
+  std::unique_ptr<lcm::LCM> registration_lcm;  ///< registration_lcm_url, when set
 
   void resolve_paths(const fs::path& dive);
   void plan_sensors(const daemon::NavdConfig& config);
@@ -87,7 +98,14 @@ struct DivePlayer::Impl {
   void start_clock(std::int64_t dive_us, PlayReport& report) const;
   /// Whether the message went to a device.
   bool write_raw(const navlcm::raw_bytes_t& raw, PlayReport& report);
+  /// Publishes a registration now, utime = the host's realtime.
+  bool publish_registration(navlcm::registration_t r);
 };
+
+bool DivePlayer::Impl::publish_registration(navlcm::registration_t r) {
+  r.utime = realtime_now_us();
+  return registration_lcm->publish(options.registration_channel, &r) == 0;
+}
 
 void DivePlayer::Impl::resolve_paths(const fs::path& dive) {
   const bool dir = fs::is_directory(dive);
@@ -193,6 +211,13 @@ DivePlayer::DivePlayer(const fs::path& dive, PlayerOptions options)
   impl_->resolve_paths(dive);
   impl_->config_text = read_text(impl_->config_path);
   impl_->plan_sensors(daemon::load_config_file(impl_->config_path.string()));
+  if (!impl_->options.registration_lcm_url.empty()) {
+    impl_->registration_lcm = std::make_unique<lcm::LCM>(impl_->options.registration_lcm_url);
+    if (!impl_->registration_lcm->good()) {
+      throw std::runtime_error("hil player: cannot open LCM " +
+                               impl_->options.registration_lcm_url + " for the registrations");
+    }
+  }
 }
 
 DivePlayer::~DivePlayer() = default;
@@ -219,13 +244,33 @@ PlayReport DivePlayer::play(const std::atomic<bool>& stop) {
   daemon::DiveLogReader reader(impl_->log_path.string());
   const double speed = impl_->options.speed;
   std::int64_t last_dive_us = 0, last_write_us = 0;
+  // The log's realtime - monotonic offset (from the raw messages): registrations carry only a
+  // realtime utime.
+  std::optional<std::int64_t> realtime_minus_monotonic_us;
   while (!stop.load()) {
     std::optional<daemon::DiveLogEvent> event = reader.next();
     if (!event) break;
     if (std::holds_alternative<navlcm::image_metadata_t>(*event)) ++report.images_not_played;
-    if (std::holds_alternative<navlcm::registration_t>(*event)) ++report.registrations_not_played;
+    if (const auto* reg = std::get_if<navlcm::registration_t>(&*event)) {
+      if (!impl_->registration_lcm || !report.started || !realtime_minus_monotonic_us) {
+        ++report.registrations_not_played;
+        continue;
+      }
+      const double at_us =
+          static_cast<double>(reg->utime - *realtime_minus_monotonic_us - report.dive_start_us);
+      sleep_until_us(report.host_start_us + std::llround(at_us / speed), stop);
+      if (stop.load()) break;
+      if (impl_->publish_registration(*reg)) {
+        ++report.registrations_played;
+      } else {
+        ++report.registrations_not_played;
+      }
+      continue;
+    }
     const auto* raw = std::get_if<navlcm::raw_bytes_t>(&*event);
     if (!raw) continue;
+    if (!realtime_minus_monotonic_us)
+      realtime_minus_monotonic_us = raw->utime - raw->host_monotonic_us;
     if (!report.started) impl_->start_clock(raw->host_monotonic_us, report);
     const double offset_us = static_cast<double>(raw->host_monotonic_us - report.dive_start_us);
     const std::int64_t due_us = report.host_start_us + std::llround(offset_us / speed);

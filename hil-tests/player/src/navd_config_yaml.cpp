@@ -88,6 +88,8 @@ std::string hil_navd_config_yaml(const std::string& dive_config_yaml,
   }
   root.remove("sim");
   root["lcm"]["url"] = lcm_url;
+  // A vision stage answers navd's proposals after the image (live mode): let pairs wait.
+  if (!root["filter"]["registration_wait_s"]) root["filter"]["registration_wait_s"] = 10.0;
   YAML::Emitter out;
   out << root;
   return "# navd config for hardware-in-the-loop playback (navtool hil-play,\n"

@@ -11,8 +11,13 @@
 //     camera_id 127.0.0.1, Mono12 configs served as Mono16: the stock fake has no Mono12). It
 //     streams the fake's test pattern when navd triggers it (camera.trigger, frame_rate_hz):
 //     the dive's NAV_IMAGE times and frames are NOT reproduced; counted in the report;
-//   * oracle registrations (NAV_REGISTRATION): not played (navd's live mode has no
-//     registration source); counted in the report.
+//   * oracle registrations (NAV_REGISTRATION): with `registration_lcm_url`, published on LCM
+//     (`registration_channel`) at their log times (the log's realtime utime mapped to the host
+//     monotonic schedule through the raw messages' realtime - monotonic offset), each with
+//     utime = the host's CLOCK_REALTIME when published (when the answer became available in
+//     this run); otherwise not played. Counted in the report. navd's live mode applies them
+//     only to its images with the same frame ids: meaningful when the camera plays the dive's
+//     own frames, which the stock fake (test pattern, navd's own frame ids) does not.
 // The generated navd config is the dive's config.yaml with those transports (sensors not
 // played keep `type: sim`, which navd's live mode does not open), without the `sim` section,
 // and with the LCM URL given.
@@ -52,6 +57,10 @@ struct PlayerOptions {
   /// the host monotonic time it is played at (µs): dive time t plays at
   /// host_start + (t - dive_start) / speed.
   std::function<void(std::int64_t dive_start_us, std::int64_t host_start_us)> on_start;
+  /// Publish the log's NAV_REGISTRATION messages on this LCM URL ("" = not played).
+  std::string registration_lcm_url;
+  /// Channel they are published on (navd's lcm.channels.registration by default).
+  std::string registration_channel = "NAV_REGISTRATION";
 
   /// "" if valid, else what is wrong.
   std::string validate() const;
@@ -75,6 +84,7 @@ struct PlayReport {
   std::vector<PlayedSensor> sensors;
   std::int64_t images_not_played = 0;                 ///< NAV_IMAGE events
   std::int64_t registrations_not_played = 0;          ///< NAV_REGISTRATION events
+  std::int64_t registrations_played = 0;              ///< published (registration_lcm_url)
   std::int64_t raw_unknown_sensor = 0;                ///< RAW_ messages of no sensor in the config
   std::int64_t dive_start_us = 0, host_start_us = 0;  ///< see PlayerOptions::on_start
   double dive_span_s = 0.0;                           ///< first to last played message, dive time
