@@ -2,8 +2,10 @@
 // navd on the vehicle: the device threads of the sensors with a hardware transport
 // (navd/device_sources.h) feed the same MeasurementQueue -> TimeOrderingBuffer
 // (filter.latency_window_ms) -> NavFilter -> Publisher / LinkPublisher path as navd --replay,
-// paced by the devices themselves. No registration table (the vision stage is not wired yet):
-// links are proposed and published, none is accepted. Recovery runs inside NavFilter per image
+// paced by the devices themselves. Camera links come from an asynchronous vision stage
+// (registration_listener.h: registration_t on lcm.channels.registration into the filter
+// thread's RegistrationTable; pairs waiting for an answer, filter.registration_wait_s, on
+// lcm.channels.link_proposals). Recovery runs inside NavFilter per image
 // (filter.cg_iterations_per_step; on its recovery thread with filter.recovery_thread), as in
 // --replay.
 // With `checkpoints`, the SLAM filter resumes
@@ -11,7 +13,8 @@
 // there (checkpoint.period_s, at shutdown), as --replay --checkpoints does for a log.
 // sd_notify READY/WATCHDOG (from the main thread, so a quiet sensor set keeps the watchdog fed)
 // and STOPPING; SIGTERM/SIGINT or `duration_s` stop it. One line of JSON goes to stdout at the
-// end: {"mode":"live","measurements":...,"images":...,"links":...,"devices":...,"wall_s":...}.
+// end: {"mode":"live","measurements":...,"images":...,"links":...,"devices":...,"wall_s":...,
+// "links_accepted":...,"registrations":...,"pairs_deferred":...} (registration_summary_json).
 // Exit status: 0 stopped, 1 the filter failed.
 
 #include <csignal>
