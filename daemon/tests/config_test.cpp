@@ -105,6 +105,26 @@ TEST(Config, SimSection) {
             "sim.seeds");
 }
 
+TEST(Config, RegistrationKeys) {
+  NavdConfig c = parse_config(kMinimal);
+  EXPECT_DOUBLE_EQ(c.filter.registration_wait_s, 0.0);  // replay: a complete table
+  EXPECT_EQ(c.filter.max_pending_registrations, 256);
+  EXPECT_EQ(c.lcm.registration.name, "NAV_REGISTRATION");
+  EXPECT_EQ(c.lcm.link_proposals.name, "NAV_LINK_PROPOSAL");
+  c = parse_config(std::string(kMinimal) +
+                   "filter: {registration_wait_s: 12.5, max_pending_registrations: 9}\n"
+                   "lcm: {channels: {registration: {name: VISION_REG}, "
+                   "link_proposals: {name: VISION_ASK}}}\n");
+  EXPECT_DOUBLE_EQ(c.filter.registration_wait_s, 12.5);
+  EXPECT_EQ(c.filter.max_pending_registrations, 9);
+  EXPECT_EQ(c.lcm.registration.name, "VISION_REG");
+  EXPECT_EQ(c.lcm.link_proposals.name, "VISION_ASK");
+  ConfigError e = expect_error(std::string(kMinimal) + "filter: {registration_wait_s: 4000}\n");
+  EXPECT_EQ(e.key_path(), "filter.registration_wait_s");
+  e = expect_error(std::string(kMinimal) + "filter: {max_pending_registrations: 0}\n");
+  EXPECT_EQ(e.key_path(), "filter.max_pending_registrations");
+}
+
 TEST(Config, RovYamlLoads) {
   const NavdConfig c = load_config_file((config_dir() / "rov.yaml").string());
   ASSERT_EQ(c.sensors.size(), 7u);
@@ -116,6 +136,7 @@ TEST(Config, RovYamlLoads) {
   ASSERT_NE(can, nullptr);
   EXPECT_EQ(can->interface, "can0");
   EXPECT_TRUE(c.filter.recovery_thread);  // the vehicle runs CG beside the filter thread
+  EXPECT_DOUBLE_EQ(c.filter.registration_wait_s, 30.0);  // the vision stage answers later
   // Relative to rov.yaml's directory, loaded and validated with the config.
   EXPECT_EQ(can->signals_file, (config_dir() / "can/dvl_fog_example.yaml").string());
   EXPECT_FALSE(can->signals.messages.empty());

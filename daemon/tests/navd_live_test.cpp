@@ -4,7 +4,8 @@
 // on NAVD_SOLUTION over LCM udpm with ttl=0 in the test's own network namespace,
 // support/net_namespace.h, skipped with the reason where namespaces are not permitted), and
 // SIGTERM must stop navd within 1 s with exit status 0 and a JSON summary counting the
-// measurements the filter took.
+// measurements the filter took. registration_t published on NAV_REGISTRATION reach the filter
+// thread (received, duplicate and invalid counted in the summary).
 #include <gtest/gtest.h>
 #include <pty.h>
 #include <signal.h>
@@ -19,6 +20,7 @@
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <navlcm/nav_solution_t.hpp>
+#include <navlcm/registration_t.hpp>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -157,8 +159,23 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
   if (udpm) lcm.subscribe("NAVD_SOLUTION", &Solutions::on, &got);
   const pid_t pid = spawn_navd({"--config", config.string(), "--lcm-url", udpm ? kUdpmUrl : "memq://"}, dir);
   const auto until = Clock::now() + std::chrono::milliseconds(2500);
+  // The vision stage's answers (NAV_REGISTRATION) reach the filter thread: one pair, its
+  // duplicate, one invalid (frame_id_i = frame_id_j), 1.5 s in (navd subscribed long before).
+  const auto answer_at = Clock::now() + std::chrono::milliseconds(1500);
+  bool answered = false;
   while (Clock::now() < until) {
     if (udpm) lcm.handleTimeout(20); else std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (udpm && !answered && Clock::now() >= answer_at) {
+      navlcm::registration_t r{};
+      r.frame_id_i = 1;
+      r.frame_id_j = 2;
+      r.success = true;
+      lcm.publish("NAV_REGISTRATION", &r);
+      lcm.publish("NAV_REGISTRATION", &r);
+      r.frame_id_i = 2;
+      lcm.publish("NAV_REGISTRATION", &r);
+      answered = true;
+    }
   }
   ASSERT_EQ(wait_exit(pid, std::chrono::milliseconds(1)), -1)
       << "navd ended early: " << slurp(dir / "stderr");
@@ -181,6 +198,10 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
                  << ": LCM not checked";
   }
   ASSERT_GE(got.count, 5) << err;  // 10 Hz once initialised
+  EXPECT_EQ(j["registrations"].get<int>(), 3) << out;
+  EXPECT_EQ(j["registrations_duplicate"].get<int>(), 1) << out;
+  EXPECT_EQ(j["registrations_invalid"].get<int>(), 1) << out;
+  EXPECT_EQ(j["registrations_dropped"].get<int>(), 0) << out;
   EXPECT_NEAR(got.last.rph_rad[2], kHeadingDeg * M_PI / 180.0, 0.01);
   EXPECT_NEAR(got.last.p_world_m[2], 10.0, 0.5);
   EXPECT_NEAR(got.last.p_world_m[0], 0.0, 0.5);  // no velocity sensor: it stays at the origin
