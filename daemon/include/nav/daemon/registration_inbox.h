@@ -5,7 +5,8 @@
 // Contract:
 // * offer() is called by ONE producer thread (the LCM listener); it never blocks and never
 //   allocates: a bounded single-producer/single-consumer moodycamel::ReaderWriterQueue with
-//   `capacity` slots preallocated; an offer into a full queue is dropped and counted.
+//   at least `capacity` slots preallocated (it rounds up); an offer into a full queue is dropped
+//   and counted.
 // * drain() and table() belong to the filter thread (no locks in the filter path): drain()
 //   inserts what arrived into the table before the filter processes the next measurements.
 //   A pair already in the table keeps its first answer (counted `duplicates`); frame_id_i >=
