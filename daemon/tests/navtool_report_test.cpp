@@ -97,8 +97,16 @@ TEST(NavtoolReport, FixtureGivesExactMetricsAndFourFigures) {
   EXPECT_NEAR(m["dr_xy_rms_m"].get<double>(), 2.0, 1e-12);
   EXPECT_NEAR(m["slam_xy_rms_m"].get<double>(), 1.0, 1e-12);
   EXPECT_NEAR(m["slam_final_xy_error_m"].get<double>(), 1.0, 1e-12);
+  // The robot pose (newest state, frame 39) is one chi2(6) sample: its interval, not one of N.
+  EXPECT_EQ(m["nees_samples"], 1);
+  EXPECT_EQ(m["nees_robot_pose"]["frame_id"], nav::report::test::kImages - 1);
+  EXPECT_DOUBLE_EQ(m["nees_mean"].get<double>(), m["nees_robot_pose"]["nees"].get<double>());
+  EXPECT_NEAR(m["nees_95_interval"][0].get<double>(), 1.23734, 1e-4);
+  EXPECT_NEAR(m["nees_95_interval"][1].get<double>(), 14.44938, 1e-4);
   EXPECT_GT(m["nees_mean"].get<double>(), m["nees_95_interval"][0].get<double>());
   EXPECT_LT(m["nees_mean"].get<double>(), m["nees_95_interval"][1].get<double>());
+  EXPECT_EQ(m["nees_all_states_diagnostic"]["states"], nav::report::test::kImages);
+  EXPECT_FALSE(m["nees_all_states_diagnostic"].contains("interval_95"));
   EXPECT_DOUBLE_EQ(m["conservative_fraction"].get<double>(), 0.9);
   EXPECT_DOUBLE_EQ(m["wall_s"].get<double>(), 2.0);
   EXPECT_DOUBLE_EQ(m["realtime_factor"].get<double>(), 80.0);  // sim.json duration 160 s / 2 s
