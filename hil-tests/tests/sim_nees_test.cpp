@@ -142,10 +142,12 @@ TEST(SimNees, NewestDelayedStateIsConsistentOverTwentySeeds) {
   for (std::size_t i = 0; i < 6; ++i) EXPECT_LE(m.component[i], hi1) << kComponents[i];
   EXPECT_EQ(m.outliers_accepted, 0u);
   EXPECT_GT(m.outliers_rejected, 0u);
-  // After a loss in a turn the first camera links are linearised decimetres to metres from the
-  // truth (5-dof bearing-only model, no relinearisation of links) and some good ones are gated
-  // (measured 8 %, README); bounded here, the 2 % target is checked with bottom lock below.
-  EXPECT_LE(m.good_gated_fraction(), 0.12);
+  // After a loss in a turn the vehicle slows to ~1 % surge (simulate.cpp surge_command) while
+  // the constant-velocity model holds its speed: dead reckoning runs metres along track, beyond
+  // the process noise (seed 19: 8.3 m against 2.65 m 1-sigma), and good links to it are gated.
+  // Measured 6.5 % (8.2 % before links were linearised at the iterated point, nav_filter.h);
+  // bounded here, the 2 % target is checked with bottom lock below.
+  EXPECT_LE(m.good_gated_fraction(), 0.08);
 }
 
 // With bottom lock throughout, the 99 % gate rejects about 1 % of the good links.
