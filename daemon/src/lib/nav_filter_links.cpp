@@ -23,7 +23,8 @@ Eigen::MatrixXd gate_joint(const core::LinkProposal& p) {
 }
 
 /// Where a camera link is linearised: the iterated-EKF point (Bell & Cathey 1993) of the pair
-/// (robot, state i) under their joint J (order [r; i]):
+/// (robot, state i) under a prior covariance J (order [r; i]; NavFilter passes the robot's
+/// block only, so state i stays at its mean):
 ///   x_{k+1} = x_0 + K_k (z - h(x_k) - H_k (x_0 - x_k)),  K_k = J H_kᵀ (H_k J H_kᵀ + R)⁻¹,
 /// i.e. the Gauss-Newton MAP point of this link and the pair's prior. The 5-dof link is a
 /// bearing (azimuth, elevation) of a baseline of a few metres: after a camera-off transit with a
@@ -195,7 +196,11 @@ void NavFilter::resolve_link(const core::LinkProposal& joint, int block_j,
     x0 << x_r, x_i;
     LinkLinearisation lin;
     try {
-      lin = iterated_link_point(camera, x0, gate_joint(joint), z, R);
+      // Only the robot moves: J's robot block is the recovered Σ_rr, while state i's is its
+      // conservative bound (loose by orders of magnitude), which would drag x_i to the link.
+      Eigen::MatrixXd robot_only = Eigen::MatrixXd::Zero(2 * kD, 2 * kD);
+      robot_only.topLeftCorner(kD, kD) = gate_joint(joint).topLeftCorner(kD, kD);
+      lin = iterated_link_point(camera, x0, robot_only, z, R);
     } catch (const std::exception& e) {  // a degenerate iterate: the mean is the point
       spdlog::warn("NavFilter: camera link {}-{} not iterated: {}", link.frame_i, link.frame_j,
                    e.what());

@@ -103,8 +103,8 @@
 //   rotation rows after a few PCG iterations and would let any outlier through; proposal keeps
 //   it so that no pair is missed). Accepted when d² <= camera_gate_chi2 (5 dof; derived from the
 //   config's 6-dof filter.gating_chi2_threshold at the same probability, chi_square.h).
-// * Link update: an accepted link is linearised at the iterated-EKF point of the pair (robot,
-//   state i) under the same J (Gauss-Newton on the link and the pair's prior, <= 10 steps,
+// * Link update: an accepted link is linearised at the iterated-EKF point of the robot (state i
+//   held at its mean; Gauss-Newton on the link and the robot's recovered Σ_rr, <= 10 steps,
 //   nav_filter_links.cpp), not at the possibly stale mean: after a camera-off transit with a
 //   DVL dropout the mean can be metres off on a baseline of a few metres, and a bearing link
 //   linearised there moves the map to the wrong place (hil-tests/README.md "Consistency").
