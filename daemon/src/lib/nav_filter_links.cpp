@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "nav/core/geometry/rotation.h"
+#include "nav/daemon/filter/link_linearisation.h"
 #include "nav/daemon/filter/nav_filter.h"
 
 namespace nav::daemon {
@@ -22,26 +23,12 @@ Eigen::MatrixXd gate_joint(const core::LinkProposal& p) {
   return joint;
 }
 
-/// Where a camera link is linearised: the iterated-EKF point (Bell & Cathey 1993) of the pair
-/// (robot, state i) under a prior covariance J (order [r; i]; NavFilter passes the robot's
-/// block only, so state i stays at its mean):
-///   x_{k+1} = x_0 + K_k (z - h(x_k) - H_k (x_0 - x_k)),  K_k = J H_kᵀ (H_k J H_kᵀ + R)⁻¹,
-/// i.e. the Gauss-Newton MAP point of this link and the pair's prior. The 5-dof link is a
-/// bearing (azimuth, elevation) of a baseline of a few metres: after a camera-off transit with a
-/// DVL dropout the prior mean can be metres off, and the link linearised there moves the map
-/// to the wrong place (measured: `hil-tests/nees-seeds` seed 33 ended 1.3 m off with 166 good
-/// links gated). The paper relinearises at the latest mean; this is that mean for the link.
-struct LinkLinearisation {
-  core::MeasVec h;  ///< h(x_r, x_i) at the point
-  core::MeasJac H_r, H_i;
-  Eigen::Matrix<double, 2 * kD, 1> x;  ///< the point [x_r; x_i]
-  int iterations = 0;
-};
+}  // namespace
 
+// iterated_link_point: link_linearisation.h (why: nav_filter.h "Link update").
 LinkLinearisation iterated_link_point(const core::CameraRelativePoseModel& camera,
-                                      const Eigen::Matrix<double, 2 * kD, 1>& x0,
-                                      const Eigen::MatrixXd& joint, const core::MeasVec& z,
-                                      const core::MeasCov& R) {
+                                      const LinkPair& x0, const Eigen::MatrixXd& joint,
+                                      const core::MeasVec& z, const core::MeasCov& R) {
   constexpr int kMaxIterations = 10;
   constexpr double kConverged = 1e-9;  // step norm (m, rad)
   LinkLinearisation l;
@@ -72,8 +59,6 @@ LinkLinearisation iterated_link_point(const core::CameraRelativePoseModel& camer
     }
   }
 }
-
-}  // namespace
 
 double NavFilter::footprint_radius_m(double altitude_m) const {
   return altitude_m * sensors_.footprint_radius_per_altitude();
