@@ -157,8 +157,7 @@ void NavFilter::resolve_link(const core::LinkProposal& joint, int block_j,
       for (int row = 0; row < 5; ++row) nu(row) = core::wrap_angle(nu(row));
       Eigen::Matrix<double, 5, 2 * kD> H;
       H << H_r, H_i;
-      const Eigen::Matrix<double, 5, 5> S =
-          H * gate_joint(joint) * H.transpose() + reg.covariance;
+      const Eigen::Matrix<double, 5, 5> S = H * gate_joint(joint) * H.transpose() + reg.covariance;
       const Eigen::LDLT<Eigen::Matrix<double, 5, 5>> ldlt(S);
       const Eigen::Matrix<double, 5, 1> v = nu;
       link.innovation = v;
@@ -201,8 +200,8 @@ void NavFilter::resolve_link(const core::LinkProposal& joint, int block_j,
       dmu[kD + k] = core::wrap_angle(dmu[kD + k]);
     }
     const core::MeasVec h_at_mean = lin.h + lin.H_r * dmu.head<kD>() + lin.H_i * dmu.tail<kD>();
-    if (core::Status s = filter_.update(block, block_j, z, h_at_mean, lin.H_i,
-                                        lin.H_r, R, core::angle_mask(camera));
+    if (core::Status s = filter_.update(block, block_j, z, h_at_mean, lin.H_i, lin.H_r, R,
+                                        core::angle_mask(camera));
         !s.ok()) {
       spdlog::warn("NavFilter: camera link {}-{} rejected by the filter: {}", link.frame_i,
                    link.frame_j, s.to_string());
