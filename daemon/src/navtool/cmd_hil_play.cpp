@@ -1,8 +1,10 @@
 // navtool hil-play: hardware-in-the-loop playback of a dive (hil-tests/README.md "Playing a
 // dive back"): the sensors' recorded bytes go, at their recorded times, into one
 // pseudo-terminal per serial sensor (a stable symlink each) and onto SocketCAN for CAN
-// sensors, and a navd config pointing at them is written, so that navd runs in live mode
-// on the played dive in another terminal. Library: hil-tests/player (nav::hil::DivePlayer).
+// sensors, the dive's images (its rendered frames, or a test pattern) from Aravis' fake GigE
+// camera on lo at the dive's image times, and a navd config pointing at them is written, so
+// that navd runs in live mode on the played dive in another terminal. Library: hil-tests/player
+// (nav::hil::DivePlayer).
 // --json prints the playback report on stdout at the end; messages go to stderr.
 #include <csignal>
 #include <cstdio>
@@ -32,6 +34,7 @@ struct HilPlayArgs {
   bool play_registrations = false;
   bool no_wait = false;
   bool no_camera = false;
+  std::string camera_image_dir;
   bool hold = false;
   double reader_timeout_s = 0.0;
   bool json = false;
@@ -74,6 +77,14 @@ nlohmann::json report_json(const hil::PlayReport& r) {
           {"dive_start_us", r.dive_start_us},
           {"host_start_us", r.host_start_us},
           {"images_not_played", r.images_not_played},
+          {"camera",
+           {{"images", r.camera.images},
+            {"with_frame", r.camera.with_frame},
+            {"frame_missing", r.camera.frame_missing},
+            {"sent", r.camera.sent},
+            {"not_taken", r.camera.not_taken},
+            {"max_send_late_s", r.camera.max_send_late_s},
+            {"mean_send_late_s", r.camera.mean_send_late_s}}},
           {"registrations_not_played", r.registrations_not_played},
           {"registrations_played", r.registrations_played},
           {"raw_unknown_sensor", r.raw_unknown_sensor}};
@@ -107,6 +118,7 @@ void run_hil_play(const HilPlayArgs& args) {
   o.wait_for_readers = !args.no_wait;
   o.fake_gige_camera = !args.no_camera;
   if (args.play_registrations) o.registration_lcm_url = args.lcm_url;
+  o.camera_image_dir = args.camera_image_dir;
   o.reader_timeout = std::chrono::milliseconds(static_cast<long>(args.reader_timeout_s * 1e3));
   std::unique_ptr<hil::DivePlayer> player;
   std::string config_path = args.config_out;
@@ -133,6 +145,15 @@ void run_hil_play(const HilPlayArgs& args) {
                player->log_path().c_str(), report.dive_span_s, report.wall_s,
                report.max_late_s * 1e3, static_cast<long long>(report.late_writes),
                report.stopped ? " (stopped)" : "");
+  if (report.camera.images > 0) {
+    std::fprintf(stderr,
+                 "hil-play: camera: %lld images triggered (%lld with the dive's frame, %lld "
+                 "missing), %lld sent, worst send %.1f ms after its time\n",
+                 static_cast<long long>(report.camera.images),
+                 static_cast<long long>(report.camera.with_frame),
+                 static_cast<long long>(report.camera.frame_missing),
+                 static_cast<long long>(report.camera.sent), report.camera.max_send_late_s * 1e3);
+  }
   if (args.hold && report.started && !report.stopped) {
     std::fprintf(stderr, "holding the devices open until Ctrl-C / SIGTERM\n");
     while (!g_stop.load()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -168,6 +189,9 @@ void add_hil_play(CLI::App& app) {
                 "meaningful when navd's images are the dive's frames)");
   cmd->add_flag("--no-camera", args->no_camera,
                 "do not serve camera_gige sensors with Aravis' fake GigE camera on lo");
+  cmd->add_option("--camera-image-dir", args->camera_image_dir,
+                  "where navd writes the camera frames it receives (camera.image_dir of the "
+                  "written config; default <serial dir>/images, 'none': not written)");
   cmd->add_option("--reader-timeout-s", args->reader_timeout_s,
                   "give up waiting for readers after this long (default 0: wait)")
       ->check(CLI::Range(0.0, 86400.0));

@@ -15,6 +15,7 @@
 #include <thread>
 #include <variant>
 
+#include "camera_playback.h"
 #include "can_output.h"
 #include "fake_gige_camera.h"
 #include "nav/daemon/config.h"
@@ -65,6 +66,11 @@ bool is_serial_type(daemon::SensorType type) {
          type == T::kFogKvh || type == T::kPressureParo || type == T::kAltimeter;
 }
 
+/// The rendered frame's size along an axis: twice the principal point (renderer.h).
+int frame_size_px(double principal_point_px) {
+  return std::clamp(static_cast<int>(std::lround(2.0 * principal_point_px)), 1, 2048);
+}
+
 }  // namespace
 
 std::string PlayerOptions::validate() const {
@@ -89,6 +95,7 @@ struct DivePlayer::Impl {
   CanOutput can;
   FakeGigeCamera camera;
   std::unique_ptr<lcm::LCM> registration_lcm;  ///< registration_lcm_url, when set
+  std::unique_ptr<CameraPlayback> camera_playback;  ///< when the camera is played
 
   void resolve_paths(const fs::path& dive);
   void plan_sensors(const daemon::NavdConfig& config);
@@ -116,6 +123,8 @@ void DivePlayer::Impl::resolve_paths(const fs::path& dive) {
     throw std::runtime_error(config_path.string() + ": no config.yaml beside the dive log");
   }
   if (options.serial_dir.empty()) options.serial_dir = config_path.parent_path() / "hil";
+  if (options.camera_image_dir.empty()) options.camera_image_dir = options.serial_dir / "images";
+  if (options.camera_image_dir == "none") options.camera_image_dir.clear();
 }
 
 void DivePlayer::Impl::plan_sensors(const daemon::NavdConfig& config) {
@@ -150,14 +159,17 @@ void DivePlayer::Impl::plan_camera(const daemon::SensorConfig& sensor, PlayedSen
     p.note = "not played (fake GigE camera disabled)";
   } else if (camera.running()) {
     p.note = "not played (the fake GigE camera serves the first camera_gige sensor only)";
-  } else if (std::string why = camera.start("NAVHIL" + std::to_string(::getpid())); !why.empty()) {
+  } else if (std::string why = camera.start("NAVHIL" + std::to_string(::getpid()),
+                                            frame_size_px(sensor.camera.cx_px),
+                                            frame_size_px(sensor.camera.cy_px));
+             !why.empty()) {
     p.note = "not played: " + why;
   } else {
     p.output = SensorOutput::kGige;
     p.device = FakeGigeCamera::kAddress;
-    p.note =
-        "Aravis fake GigE camera on lo: its test pattern at navd's trigger rate (the "
-        "dive's image times and frames are not reproduced)";
+    p.note = "Aravis fake GigE camera on lo, triggered at the dive's image times";
+    camera_playback = std::make_unique<CameraPlayback>(camera, log_path, config_path.parent_path(),
+                                                       sensor.latency_s);
   }
 }
 
@@ -178,6 +190,7 @@ void DivePlayer::Impl::start_clock(std::int64_t dive_us, PlayReport& report) con
   report.started = true;
   report.dive_start_us = dive_us;
   report.host_start_us = monotonic_now_us();
+  if (camera_playback) camera_playback->start(dive_us, report.host_start_us, options.speed);
   if (options.on_start) options.on_start(report.dive_start_us, report.host_start_us);
 }
 
@@ -227,8 +240,9 @@ const fs::path& DivePlayer::log_path() const { return impl_->log_path; }
 const fs::path& DivePlayer::serial_dir() const { return impl_->options.serial_dir; }
 
 void DivePlayer::write_navd_config(const fs::path& path, const std::string& lcm_url) const {
-  const std::string text = hil_navd_config_yaml(
-      impl_->config_text, fs::absolute(impl_->config_path).parent_path(), impl_->sensors, lcm_url);
+  const std::string text =
+      hil_navd_config_yaml(impl_->config_text, fs::absolute(impl_->config_path).parent_path(),
+                           impl_->sensors, lcm_url, impl_->options.camera_image_dir);
   {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
     out << text;
@@ -280,6 +294,10 @@ PlayReport DivePlayer::play(const std::atomic<bool>& stop) {
     report.max_late_s = std::max(report.max_late_s, (last_write_us - due_us) * 1e-6);
     if (last_write_us - due_us > 10'000) ++report.late_writes;
     if (impl_->write_raw(*raw, report)) last_dive_us = raw->host_monotonic_us;
+  }
+  if (impl_->camera_playback && report.started) {
+    report.camera = impl_->camera_playback->finish(stop);
+    report.images_not_played -= report.camera.images;
   }
   report.stopped = stop.load();
   if (report.started) {

@@ -69,7 +69,8 @@ YAML::Node played_transport(const YAML::Node& recorded, const PlayedSensor& sens
 std::string hil_navd_config_yaml(const std::string& dive_config_yaml,
                                  const std::filesystem::path& dive_config_dir,
                                  const std::vector<PlayedSensor>& sensors,
-                                 const std::string& lcm_url) {
+                                 const std::string& lcm_url,
+                                 const std::filesystem::path& camera_image_dir) {
   YAML::Node root = YAML::Load(dive_config_yaml);
   if (!root.IsMap() || !root["sensors"] || !root["sensors"].IsSequence()) {
     throw std::runtime_error("dive config: not a YAML map with a sensors list");
@@ -79,11 +80,10 @@ std::string hil_navd_config_yaml(const std::string& dive_config_yaml,
     const PlayedSensor* played = find_sensor(sensors, name);
     if (!played) throw std::runtime_error("dive config: sensor '" + name + "' has no plan");
     sensor["transport"] = played_transport(sensor["transport"], *played, dive_config_dir);
-    YAML::Node camera = sensor["camera"];
-    const bool mono12 =
-        camera && camera["pixel_format"] && camera["pixel_format"].as<std::string>() == "mono12";
-    if (played->output == SensorOutput::kGige && mono12) {
-      camera["pixel_format"] = "mono16";  // Aravis' stock fake camera has no Mono12
+    if (played->output == SensorOutput::kGige) {
+      YAML::Node camera = sensor["camera"];
+      camera["trigger"] = "hardware";  // the player is the trigger line (fake_gige_camera.h)
+      if (!camera_image_dir.empty()) camera["image_dir"] = camera_image_dir.string();
     }
   }
   root.remove("sim");

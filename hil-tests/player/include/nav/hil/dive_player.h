@@ -8,16 +8,17 @@
 //   * CAN sensors (dvl_can): the log's candump lines as frames on a SocketCAN interface
 //     (vcan0 by default) when the kernel has it, else skipped with the reason;
 //   * the first camera_gige sensor: Aravis' fake GigE Vision camera on lo (fake_gige_camera.h,
-//     camera_id 127.0.0.1, Mono12 configs served as Mono16: the stock fake has no Mono12). It
-//     streams the fake's test pattern when navd triggers it (camera.trigger, frame_rate_hz):
-//     the dive's NAV_IMAGE times and frames are NOT reproduced; counted in the report;
+//     camera_id 127.0.0.1, Mono12Packed, hardware trigger on Line1 with the player as the
+//     trigger line): each NAV_IMAGE of the log becomes one frame, the dive's rendered PNG
+//     (`navtool simulate --render-images`) or else a test pattern, sent when the vehicle's
+//     frame reached the host (camera_playback.h); counted in the report;
 //   * oracle registrations (NAV_REGISTRATION): with `registration_lcm_url`, published on LCM
 //     (`registration_channel`) at their log times (the log's realtime utime mapped to the host
 //     monotonic schedule through the raw messages' realtime - monotonic offset), each with
 //     utime = the host's CLOCK_REALTIME when published (when the answer became available in
 //     this run); otherwise not played. Counted in the report. navd's live mode applies them
-//     only to its images with the same frame ids: meaningful when the camera plays the dive's
-//     own frames, which the stock fake (test pattern, navd's own frame ids) does not.
+//     only to its images with the same frame ids (navd numbers frames by the camera's frame
+//     counter, not the dive's frame ids).
 // The generated navd config is the dive's config.yaml with those transports (sensors not
 // played keep `type: sim`, which navd's live mode does not open), without the `sim` section,
 // and with the LCM URL given.
@@ -48,6 +49,9 @@ struct PlayerOptions {
   /// Serve the first camera_gige sensor with Aravis' fake GigE camera on lo (one per network
   /// namespace: GVCP port 3956); false: cameras are not played.
   bool fake_gige_camera = true;
+  /// Where navd writes the camera frames it receives (the played camera's `image_dir` in the
+  /// generated config); empty: `<serial_dir>/images`; "none": navd does not write them.
+  std::filesystem::path camera_image_dir;
   /// Start the dive's clock only once every pty has a reader (navd opened its devices), so
   /// navd sees the dive from its first byte; false: start at once.
   bool wait_for_readers = true;
@@ -80,9 +84,21 @@ struct PlayedSensor {
   std::int64_t dropped_frames = 0;  ///< CAN: lines that did not parse or frames not sent
 };
 
+/// The camera part of the playback (camera_playback.h), when a camera is played.
+struct CameraPlayReport {
+  std::int64_t images = 0;         ///< NAV_IMAGE events played (triggered)
+  std::int64_t with_frame = 0;     ///< of those, with the dive's PNG loaded
+  std::int64_t frame_missing = 0;  ///< file_path set but the PNG could not be read
+  std::int64_t sent = 0;           ///< frames the fake sent for them
+  std::int64_t not_taken = 0;      ///< triggers the fake had not acted on by the next one
+  double max_send_late_s = 0.0;    ///< worst frame send time after its due time
+  double mean_send_late_s = 0.0;
+};
+
 struct PlayReport {
   std::vector<PlayedSensor> sensors;
-  std::int64_t images_not_played = 0;                 ///< NAV_IMAGE events
+  std::int64_t images_not_played = 0;                 ///< NAV_IMAGE events not played
+  CameraPlayReport camera;                            ///< NAV_IMAGE events played
   std::int64_t registrations_not_played = 0;          ///< NAV_REGISTRATION events
   std::int64_t registrations_played = 0;              ///< published (registration_lcm_url)
   std::int64_t raw_unknown_sensor = 0;                ///< RAW_ messages of no sensor in the config

@@ -1,0 +1,114 @@
+// CameraPlayback: the dive's NAV_IMAGE events through the fake GigE camera; see
+// camera_playback.h.
+#include "camera_playback.h"
+
+#include <spdlog/spdlog.h>
+#include <time.h>
+
+#include <cmath>
+#include <opencv2/imgcodecs.hpp>
+#include <variant>
+
+#include "nav/daemon/dive_log.h"
+
+namespace nav::hil {
+namespace {
+
+std::int64_t monotonic_now_us() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
+}
+
+/// Sleeps until host monotonic `until_us` in 50 ms slices; false if `stop` was set.
+bool sleep_until_us(std::int64_t until_us, const std::atomic<bool>& stop) {
+  for (std::int64_t now = monotonic_now_us(); now < until_us && !stop.load();
+       now = monotonic_now_us()) {
+    const std::int64_t wake = std::min(until_us, now + 50'000);
+    const timespec ts{static_cast<time_t>(wake / 1'000'000),
+                      static_cast<long>((wake % 1'000'000) * 1000)};
+    ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+  }
+  return !stop.load();
+}
+
+/// The dive's 16-bit frame, empty if it has none or it cannot be read.
+cv::Mat load_frame(const std::filesystem::path& path) {
+  cv::Mat image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+  if (image.empty() || image.type() != CV_16UC1) return {};
+  return image;
+}
+
+}  // namespace
+
+CameraPlayback::CameraPlayback(FakeGigeCamera& camera, std::filesystem::path log_path,
+                               std::filesystem::path dive_dir, double latency_s,
+                               std::int64_t lead_us)
+    : camera_(camera),
+      log_path_(std::move(log_path)),
+      dive_dir_(std::move(dive_dir)),
+      latency_us_(std::llround(latency_s * 1e6)),
+      lead_us_(lead_us) {}
+
+CameraPlayback::~CameraPlayback() {
+  stop_.store(true);
+  if (thread_.joinable()) thread_.join();
+}
+
+void CameraPlayback::start(std::int64_t dive_start_us, std::int64_t host_start_us, double speed) {
+  if (thread_.joinable()) return;
+  dive_start_us_ = dive_start_us;
+  host_start_us_ = host_start_us;
+  speed_ = speed;
+  thread_ = std::thread([this] { run(); });
+}
+
+CameraPlayReport CameraPlayback::finish(const std::atomic<bool>& stop) {
+  while (thread_.joinable() && !stop.load()) {
+    // The thread ends after the last image's frame is sent; poll `stop` meanwhile.
+    if (done_.load()) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  stop_.store(true);
+  if (thread_.joinable()) thread_.join();
+  const FakeCameraStats s = camera_.stats();
+  CameraPlayReport r = report_;
+  r.sent = s.sent;
+  r.not_taken = s.not_taken;
+  r.max_send_late_s = s.max_late_s;
+  r.mean_send_late_s = s.mean_late_s;
+  return r;
+}
+
+void CameraPlayback::run() {
+  try {
+    daemon::DiveLogReader reader(log_path_.string());
+    while (!stop_.load()) {
+      std::optional<daemon::DiveLogEvent> event = reader.next();
+      if (!event) break;
+      const auto* image = std::get_if<navlcm::image_metadata_t>(&*event);
+      if (image == nullptr) continue;
+      cv::Mat frame;
+      if (!image->file_path.empty()) {
+        frame = load_frame(dive_dir_ / image->file_path);
+        if (frame.empty()) ++report_.frame_missing;
+      }
+      const double offset_us =
+          static_cast<double>(image->time_of_validity_us + latency_us_ - dive_start_us_);
+      const std::int64_t due_us = host_start_us_ + std::llround(offset_us / speed_);
+      if (!sleep_until_us(due_us - lead_us_, stop_)) break;
+      if (!frame.empty()) ++report_.with_frame;
+      ++report_.images;
+      camera_.fire(std::move(frame), due_us);
+    }
+    // Let the last frame go out (the fake acts on a trigger within ~100 ms of its due time).
+    const std::int64_t give_up_us = monotonic_now_us() + lead_us_ + 1'000'000;
+    while (!stop_.load() && !camera_.idle() && monotonic_now_us() < give_up_us)
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  } catch (const std::exception& e) {
+    spdlog::error("hil camera playback: {}", e.what());
+  }
+  done_.store(true);
+}
+
+}  // namespace nav::hil
