@@ -95,6 +95,17 @@ void play_and_check(bool render, double speed) {
   if (camera_plan->output != nav::hil::SensorOutput::kGige)
     GTEST_SKIP() << "fake GigE camera not played: " << camera_plan->note;
 
+  // The generated navd config: the player triggers the camera (Line1), navd writes its frames.
+  player.write_navd_config(dir / "navd.yaml", "memq://");
+  const auto navd_config = nav::daemon::load_config_file((dir / "navd.yaml").string());
+  const auto navd_camera = std::find_if(
+      navd_config.sensors.begin(), navd_config.sensors.end(),
+      [](const nav::daemon::SensorConfig& s) { return nav::daemon::is_camera(s.type); });
+  ASSERT_NE(navd_camera, navd_config.sensors.end());
+  EXPECT_EQ(navd_camera->camera.trigger, nav::daemon::Trigger::kHardware);
+  EXPECT_EQ(navd_camera->camera.pixel_format, nav::daemon::PixelFormat::kMono12);
+  EXPECT_EQ(navd_camera->camera.image_dir, (po.serial_dir / "images").string());
+
   GigeOptions go;  // what navd opens from the generated config
   go.camera_id = "127.0.0.1";
   go.pixel_format = nav::drivers::PixelFormat::kMono12Packed;
