@@ -27,6 +27,7 @@
 #include <thread>
 #include <vector>
 
+#include "support/navd_process.h"
 #include "support/net_namespace.h"
 #include "support/udpm_probe.h"
 
@@ -34,6 +35,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
+using nav::tool::test::spawn_navd;
+using nav::tool::test::wait_exit;
 constexpr const char* kUdpmUrl = nav::tool::test::kIsolatedUdpmUrl;
 // navd and this test in a network namespace of their own (before any thread starts).
 const nav::tool::test::NetNamespace& kNet = nav::tool::test::isolated_network();
@@ -106,34 +109,6 @@ fs::path write_live_config(const fs::path& dir, const PtySensor& heading, const 
   return path;
 }
 
-pid_t spawn_navd(const std::vector<std::string>& args, const fs::path& dir) {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    std::vector<std::string> copy = args;
-    std::vector<char*> argv{const_cast<char*>(NAVD_PATH)};
-    for (std::string& a : copy) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    if (!std::freopen((dir / "stdout").c_str(), "w", stdout) ||
-        !std::freopen((dir / "stderr").c_str(), "w", stderr)) {
-      ::_exit(126);
-    }
-    ::execv(NAVD_PATH, argv.data());
-    ::_exit(127);
-  }
-  return pid;
-}
-
-/// Waits up to `timeout` for `pid`; its exit code, -1 if still running or signalled.
-int wait_exit(pid_t pid, std::chrono::milliseconds timeout) {
-  const auto deadline = Clock::now() + timeout;
-  do {
-    int status = 0;
-    if (::waitpid(pid, &status, WNOHANG) == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  } while (Clock::now() < deadline);
-  return -1;
-}
-
 struct Solutions {
   int count = 0;
   navlcm::nav_solution_t first{}, last{};
@@ -178,12 +153,12 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
     }
   }
   ASSERT_EQ(wait_exit(pid, std::chrono::milliseconds(1)), -1)
-      << "navd ended early: " << slurp(dir / "stderr");
+      << "navd ended early: " << slurp(dir / "navd.stderr");
   const auto sent = Clock::now();
   ASSERT_EQ(::kill(pid, SIGTERM), 0);
   const int code = wait_exit(pid, std::chrono::seconds(5));
   const double stop_s = std::chrono::duration<double>(Clock::now() - sent).count();
-  const std::string out = slurp(dir / "stdout"), err = slurp(dir / "stderr");
+  const std::string out = slurp(dir / "navd.stdout"), err = slurp(dir / "navd.stderr");
   fs::remove_all(dir);
   EXPECT_EQ(code, 0) << err;
   EXPECT_LT(stop_s, 1.0);

@@ -16,8 +16,9 @@
 
 #include "nav/daemon/config.h"
 #include "nav/drivers/transports/gige_camera.h"
+#include "../../daemon/tests/support/navd_process.h"
+#include "../../daemon/tests/support/net_namespace.h"
 #include "nav/hil/dive_player.h"
-#include "support/hil_process.h"
 #include "support/sim_dive.h"
 
 namespace {
@@ -66,7 +67,8 @@ struct Received {
 
 /// Simulates `images` images (rendered or not), plays them at `speed` and grabs the frames.
 void play_and_check(bool render, double speed) {
-  const std::string netns_error = nav::hil::test::enter_private_network();  // before any thread
+  const nav::tool::test::NetNamespace& net = nav::tool::test::isolated_network();  // before any thread
+  const std::string netns_error = net.ok ? "" : net.reason;
   if (!netns_error.empty()) GTEST_SKIP() << "no private network namespace: " << netns_error;
   const fs::path dir = nav::sim::test::scratch_dir(render ? "frames" : "pattern");
   nav::sim::SimOptions so;

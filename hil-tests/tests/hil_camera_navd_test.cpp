@@ -19,8 +19,9 @@
 #include <variant>
 
 #include "../../daemon/tests/support/udpm_probe.h"
+#include "../../daemon/tests/support/navd_process.h"
+#include "../../daemon/tests/support/net_namespace.h"
 #include "nav/hil/dive_player.h"
-#include "support/hil_process.h"
 #include "support/sim_dive.h"
 
 namespace {
@@ -39,7 +40,8 @@ struct Images {
 };
 
 TEST(HilCameraNavd, NavdGetsTheDivesFramesAtTheDivesImageTimes) {
-  const std::string netns_error = nav::hil::test::enter_private_network();  // before any thread
+  const nav::tool::test::NetNamespace& net = nav::tool::test::isolated_network();  // before any thread
+  const std::string netns_error = net.ok ? "" : net.reason;
   if (!netns_error.empty()) GTEST_SKIP() << "no private network namespace: " << netns_error;
   const fs::path dir = nav::sim::test::scratch_dir("hil_camera_navd");
   nav::sim::SimOptions so;
@@ -69,7 +71,7 @@ TEST(HilCameraNavd, NavdGetsTheDivesFramesAtTheDivesImageTimes) {
       GTEST_SKIP() << "fake GigE camera not played: " << s.note;
   }
   player.write_navd_config(dir / "navd.yaml", kUdpmUrl);
-  const pid_t navd = nav::hil::test::spawn_navd({"--config", (dir / "navd.yaml").string()}, dir);
+  const pid_t navd = nav::tool::test::spawn_navd({"--config", (dir / "navd.yaml").string()}, dir);
   ASSERT_GT(navd, 0);
   std::atomic<bool> stop{false}, done{false};
   nav::hil::PlayReport report;
@@ -83,7 +85,7 @@ TEST(HilCameraNavd, NavdGetsTheDivesFramesAtTheDivesImageTimes) {
   play.join();
   for (int i = 0; i < 10; ++i) lcm.handleTimeout(20);
   ASSERT_EQ(::kill(navd, SIGTERM), 0);
-  EXPECT_EQ(nav::hil::test::wait_exit(navd, std::chrono::seconds(5)), 0)
+  EXPECT_EQ(nav::tool::test::wait_exit(navd, std::chrono::seconds(5)), 0)
       << file_text(dir / "navd.stderr");
 
   ASSERT_TRUE(report.started) << "navd did not open the ptys: " << file_text(dir / "navd.stderr");

@@ -30,8 +30,9 @@
 #include <thread>
 
 #include "../../daemon/tests/support/udpm_probe.h"
+#include "../../daemon/tests/support/navd_process.h"
+#include "../../daemon/tests/support/net_namespace.h"
 #include "nav/hil/dive_player.h"
-#include "support/hil_process.h"
 #include "support/oracle_vision.h"
 #include "support/sim_dive.h"
 
@@ -153,7 +154,8 @@ std::int64_t realtime_now_us() {
 }
 
 TEST(HilPlayback, NavdOnPlayedPtysTracksTheTruthAndReportsHealthyRates) {
-  const std::string netns_error = nav::hil::test::enter_private_network();  // before any thread
+  const nav::tool::test::NetNamespace& net = nav::tool::test::isolated_network();  // before any thread
+  const std::string netns_error = net.ok ? "" : net.reason;
   if (!netns_error.empty())
     std::printf("no private network namespace (%s): host network\n", netns_error.c_str());
   const fs::path dir = nav::sim::test::scratch_dir("hil_playback");
@@ -195,7 +197,7 @@ TEST(HilPlayback, NavdOnPlayedPtysTracksTheTruthAndReportsHealthyRates) {
       std::printf("camera part skipped: %s\n", s.note.c_str());
   }
   player.write_navd_config(dir / "navd.yaml", kUdpmUrl);
-  const pid_t navd = nav::hil::test::spawn_navd({"--config", (dir / "navd.yaml").string()}, dir);
+  const pid_t navd = nav::tool::test::spawn_navd({"--config", (dir / "navd.yaml").string()}, dir);
   ASSERT_GT(navd, 0);
 
   std::atomic<bool> stop{false}, done{false};
@@ -216,11 +218,11 @@ TEST(HilPlayback, NavdOnPlayedPtysTracksTheTruthAndReportsHealthyRates) {
   play.join();
   for (int i = 0; i < 10 && udpm; ++i) lcm.handleTimeout(20);
 
-  ASSERT_EQ(nav::hil::test::wait_exit(navd, std::chrono::milliseconds(1)), -1)
+  ASSERT_EQ(nav::tool::test::wait_exit(navd, std::chrono::milliseconds(1)), -1)
       << "navd ended early: " << file_text(dir / "navd.stderr");
   const auto sent = std::chrono::steady_clock::now();
   ASSERT_EQ(::kill(navd, SIGTERM), 0);
-  const int code = nav::hil::test::wait_exit(navd, std::chrono::seconds(5));
+  const int code = nav::tool::test::wait_exit(navd, std::chrono::seconds(5));
   const double stop_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
   const std::string out = file_text(dir / "navd.stdout"), err = file_text(dir / "navd.stderr");

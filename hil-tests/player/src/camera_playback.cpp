@@ -9,28 +9,11 @@
 #include <opencv2/imgcodecs.hpp>
 #include <variant>
 
+#include "host_clock.h"
 #include "nav/daemon/dive_log.h"
 
 namespace nav::hil {
 namespace {
-
-std::int64_t monotonic_now_us() {
-  timespec ts{};
-  ::clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
-}
-
-/// Sleeps until host monotonic `until_us` in 50 ms slices; false if `stop` was set.
-bool sleep_until_us(std::int64_t until_us, const std::atomic<bool>& stop) {
-  for (std::int64_t now = monotonic_now_us(); now < until_us && !stop.load();
-       now = monotonic_now_us()) {
-    const std::int64_t wake = std::min(until_us, now + 50'000);
-    const timespec ts{static_cast<time_t>(wake / 1'000'000),
-                      static_cast<long>((wake % 1'000'000) * 1000)};
-    ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
-  }
-  return !stop.load();
-}
 
 /// The dive's 16-bit frame, empty if it has none or it cannot be read.
 cv::Mat load_frame(const std::filesystem::path& path) {

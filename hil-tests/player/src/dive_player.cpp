@@ -18,6 +18,7 @@
 #include "camera_playback.h"
 #include "can_output.h"
 #include "fake_gige_camera.h"
+#include "host_clock.h"
 #include "nav/daemon/config.h"
 #include "nav/daemon/dive_log.h"
 #include "nav/hil/pty_link.h"
@@ -27,30 +28,6 @@ namespace nav::hil {
 namespace fs = std::filesystem;
 
 namespace {
-
-std::int64_t monotonic_now_us() {
-  timespec ts{};
-  ::clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
-}
-
-/// Sleeps until host monotonic `until_us`, in slices so that `stop` is seen within 50 ms.
-void sleep_until_us(std::int64_t until_us, const std::atomic<bool>& stop) {
-  constexpr std::int64_t kSliceUs = 50'000;
-  for (std::int64_t now = monotonic_now_us(); now < until_us && !stop.load();
-       now = monotonic_now_us()) {
-    const std::int64_t wake = std::min(until_us, now + kSliceUs);
-    const timespec ts{static_cast<time_t>(wake / 1'000'000),
-                      static_cast<long>((wake % 1'000'000) * 1000)};
-    ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
-  }
-}
-
-std::int64_t realtime_now_us() {
-  timespec ts{};
-  ::clock_gettime(CLOCK_REALTIME, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
-}
 
 std::string read_text(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -94,7 +71,7 @@ struct DivePlayer::Impl {
   std::map<std::size_t, std::unique_ptr<PtyLink>> ptys;  ///< by sensor index
   CanOutput can;
   FakeGigeCamera camera;
-  std::unique_ptr<lcm::LCM> registration_lcm;  ///< registration_lcm_url, when set
+  std::unique_ptr<lcm::LCM> registration_lcm;       ///< registration_lcm_url, when set
   std::unique_ptr<CameraPlayback> camera_playback;  ///< when the camera is played
 
   void resolve_paths(const fs::path& dive);

@@ -11,16 +11,11 @@
 #include <fstream>
 #include <vector>
 
+#include "host_clock.h"
 #include "nav/drivers/transports/mono_unpack.h"
 
 namespace nav::hil {
 namespace {
-
-std::int64_t monotonic_now_us() {
-  timespec ts{};
-  ::clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
-}
 
 /// Longest the fill callback holds the fake's thread (its GVCP answers wait meanwhile; Aravis'
 /// heartbeat timeout is 3 s).
