@@ -23,6 +23,65 @@ Eigen::MatrixXd gate_joint(const core::LinkProposal& p) {
   return joint;
 }
 
+/// The 5-dof gate at the means x0 = [x_j; x_i] with the joint covariance: fills the link's
+/// innovation and Mahalanobis distance; true when it passes (nav_filter.h "Gate").
+bool gate_link(const core::CameraRelativePoseModel& camera, const LinkPair& x0,
+               const Eigen::MatrixXd& joint_cov, const RegistrationResult& reg, double gate_chi2,
+               LinkRecord& link) {
+  const auto x_r = x0.head<kD>(), x_i = x0.tail<kD>();
+  if (camera.baseline_is_degenerate(x_i, x_r)) return false;
+  try {
+    core::MeasJac H_i, H_r;
+    core::MeasVec nu = reg.z - camera.predict(x_i, x_r, &H_i, &H_r);
+    for (int row = 0; row < 5; ++row) nu(row) = core::wrap_angle(nu(row));
+    Eigen::Matrix<double, 5, 2 * kD> H;
+    H << H_r, H_i;
+    const Eigen::Matrix<double, 5, 5> S = H * joint_cov * H.transpose() + reg.covariance;
+    const Eigen::LDLT<Eigen::Matrix<double, 5, 5>> ldlt(S);
+    link.innovation = nu;
+    link.mahalanobis_sq = nu.dot(ldlt.solve(nu));
+    return ldlt.info() == Eigen::Success && std::isfinite(link.mahalanobis_sq) &&
+           link.mahalanobis_sq <= gate_chi2;
+  } catch (const std::exception& e) {
+    spdlog::warn("NavFilter: camera model for frames {}-{}: {}", link.frame_i, link.frame_j,
+                 e.what());
+    return false;
+  }
+}
+
+/// The accepted link's linearisation at the robot's iterated point (link_linearisation.h;
+/// nav_filter.h "Link update"), or at the means where the iteration fails.
+LinkLinearisation linearise_at_iterated_point(const core::CameraRelativePoseModel& camera,
+                                              const LinkPair& x0, const Eigen::MatrixXd& joint_cov,
+                                              const RegistrationResult& reg,
+                                              const LinkRecord& link) {
+  LinkLinearisation lin;
+  try {
+    // Only the robot moves: J's robot block is the recovered Σ_rr, while state i's is its
+    // conservative bound (loose by orders of magnitude), which would drag x_i to the link.
+    Eigen::MatrixXd robot_only = Eigen::MatrixXd::Zero(2 * kD, 2 * kD);
+    robot_only.topLeftCorner(kD, kD) = joint_cov.topLeftCorner(kD, kD);
+    lin = iterated_link_point(camera, x0, robot_only, reg.z, reg.covariance);
+  } catch (const std::exception& e) {  // a degenerate iterate: the mean is the point
+    spdlog::warn("NavFilter: camera link {}-{} not iterated: {}", link.frame_i, link.frame_j,
+                 e.what());
+    lin = LinkLinearisation{};
+    lin.x = x0;
+    lin.h = camera.predict(x0.tail<kD>(), x0.head<kD>(), &lin.H_i, &lin.H_r);
+  }
+  return lin;
+}
+
+/// a - b with the attitude components wrapped to (-π, π].
+LinkPair wrapped_difference(const LinkPair& a, const LinkPair& b) {
+  LinkPair d = a - b;
+  for (int k = 3; k < 6; ++k) {
+    d[k] = core::wrap_angle(d[k]);
+    d[kD + k] = core::wrap_angle(d[kD + k]);
+  }
+  return d;
+}
+
 }  // namespace
 
 // iterated_link_point: link_linearisation.h (why: nav_filter.h "Link update").
@@ -146,67 +205,27 @@ void NavFilter::resolve_link(const core::LinkProposal& joint, int block_j,
   // Gate (nav_filter.h): ν = z − h(μ_i, μ_j), S = H J Hᵀ + R with H = [H_j H_i] (j: the robot
   // at the image, or its delayed state for a deferred link).
   const core::CameraRelativePoseModel& camera = *sensors_.camera();
-  const auto& x_i = filter_.mean_block(block);
-  const auto& x_r = filter_.mean_block(block_j);
-  link.outcome = LinkOutcome::kGated;
-  core::MeasJac H_i, H_r;
-  core::MeasVec nu;
-  if (!camera.baseline_is_degenerate(x_i, x_r)) {
-    try {
-      nu = reg.z - camera.predict(x_i, x_r, &H_i, &H_r);
-      for (int row = 0; row < 5; ++row) nu(row) = core::wrap_angle(nu(row));
-      Eigen::Matrix<double, 5, 2 * kD> H;
-      H << H_r, H_i;
-      const Eigen::Matrix<double, 5, 5> S = H * gate_joint(joint) * H.transpose() + reg.covariance;
-      const Eigen::LDLT<Eigen::Matrix<double, 5, 5>> ldlt(S);
-      const Eigen::Matrix<double, 5, 1> v = nu;
-      link.innovation = v;
-      link.mahalanobis_sq = v.dot(ldlt.solve(v));
-      if (ldlt.info() == Eigen::Success && std::isfinite(link.mahalanobis_sq) &&
-          link.mahalanobis_sq <= options_.camera_gate_chi2) {
-        link.outcome = LinkOutcome::kAccepted;
-      }
-    } catch (const std::exception& e) {
-      spdlog::warn("NavFilter: camera model for frames {}-{}: {}", link.frame_i, link.frame_j,
-                   e.what());
-    }
-  }
+  const LinkPair x0 =
+      (LinkPair() << filter_.mean_block(block_j), filter_.mean_block(block)).finished();
+  const Eigen::MatrixXd joint_cov = gate_joint(joint);
+  link.outcome = gate_link(camera, x0, joint_cov, reg, options_.camera_gate_chi2, link)
+                     ? LinkOutcome::kAccepted
+                     : LinkOutcome::kGated;
   if (link.outcome == LinkOutcome::kAccepted) {
     const core::MeasCov R = reg.covariance;
-    const core::MeasVec z = reg.z;
-    // Linearised at the iterated point x* (above): the EIF update adds Hᵀ R⁻¹ (z - h(x*) + H x*)
-    // to η; Esdf::update forms z - h' + H μ, so h' = h(x*) + H (μ - x*).
-    Eigen::Matrix<double, 2 * kD, 1> x0;
-    x0 << x_r, x_i;
-    LinkLinearisation lin;
-    try {
-      // Only the robot moves: J's robot block is the recovered Σ_rr, while state i's is its
-      // conservative bound (loose by orders of magnitude), which would drag x_i to the link.
-      Eigen::MatrixXd robot_only = Eigen::MatrixXd::Zero(2 * kD, 2 * kD);
-      robot_only.topLeftCorner(kD, kD) = gate_joint(joint).topLeftCorner(kD, kD);
-      lin = iterated_link_point(camera, x0, robot_only, z, R);
-    } catch (const std::exception& e) {  // a degenerate iterate: the mean is the point
-      spdlog::warn("NavFilter: camera link {}-{} not iterated: {}", link.frame_i, link.frame_j,
-                   e.what());
-      lin = LinkLinearisation{};
-      lin.x = x0;
-      lin.h = camera.predict(x_i, x_r, &lin.H_i, &lin.H_r);
-    }
-    H_r = lin.H_r;  // for the bound update below
-    H_i = lin.H_i;
-    Eigen::Matrix<double, 2 * kD, 1> dmu = x0 - lin.x;
-    for (int k = 3; k < 6; ++k) {
-      dmu[k] = core::wrap_angle(dmu[k]);
-      dmu[kD + k] = core::wrap_angle(dmu[kD + k]);
-    }
+    const LinkLinearisation lin = linearise_at_iterated_point(camera, x0, joint_cov, reg, link);
+    // The EIF update adds Hᵀ R⁻¹ (z - h(x*) + H x*) to η at the point x*; Esdf::update forms
+    // z - h' + H μ, so h' = h(x*) + H (μ - x*).
+    const LinkPair dmu = wrapped_difference(x0, lin.x);
     const core::MeasVec h_at_mean = lin.h + lin.H_r * dmu.head<kD>() + lin.H_i * dmu.tail<kD>();
-    if (core::Status s = filter_.update(block, block_j, z, h_at_mean, lin.H_i, lin.H_r, R,
+    if (core::Status s = filter_.update(block, block_j, reg.z, h_at_mean, lin.H_i, lin.H_r, R,
                                         core::angle_mask(camera));
         !s.ok()) {
       spdlog::warn("NavFilter: camera link {}-{} rejected by the filter: {}", link.frame_i,
                    link.frame_j, s.to_string());
       link.outcome = LinkOutcome::kGated;
-    } else if (block_j == core::Esdf::kRobotBlock && !bounds_.update(joint, H_r, H_i, R).ok()) {
+    } else if (block_j == core::Esdf::kRobotBlock &&
+               !bounds_.update(joint, lin.H_r, lin.H_i, R).ok()) {
       ++counters_.bound_update_failures;
     }
   }
