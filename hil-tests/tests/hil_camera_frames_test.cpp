@@ -14,10 +14,10 @@
 #include <thread>
 #include <variant>
 
-#include "nav/daemon/config.h"
-#include "nav/drivers/transports/gige_camera.h"
 #include "../../daemon/tests/support/navd_process.h"
 #include "../../daemon/tests/support/net_namespace.h"
+#include "nav/daemon/config.h"
+#include "nav/drivers/transports/gige_camera.h"
 #include "nav/hil/dive_player.h"
 #include "support/sim_dive.h"
 
@@ -67,14 +67,12 @@ struct Received {
 
 /// Simulates `images` images (rendered or not), plays them at `speed` and grabs the frames.
 void play_and_check(bool render, double speed) {
-  const nav::tool::test::NetNamespace& net = nav::tool::test::isolated_network();  // before any thread
+  const nav::tool::test::NetNamespace& net =
+      nav::tool::test::isolated_network();  // before any thread
   const std::string netns_error = net.ok ? "" : net.reason;
   if (!netns_error.empty()) GTEST_SKIP() << "no private network namespace: " << netns_error;
   const fs::path dir = nav::sim::test::scratch_dir(render ? "frames" : "pattern");
-  nav::sim::SimOptions so;
-  so.out_dir = (dir / "dive").string();
-  so.seed = 5;
-  so.mission.images = 3;
+  nav::sim::SimOptions so = nav::sim::test::sim_options((dir / "dive"), 5, 3);
   so.render_images = render;
   nav::sim::simulate_dive(so, nav::sim::test::sim_config_path().string());
   const std::vector<DiveImage> images = dive_images(dir / "dive");

@@ -18,9 +18,9 @@
 #include <thread>
 #include <variant>
 
-#include "../../daemon/tests/support/udpm_probe.h"
 #include "../../daemon/tests/support/navd_process.h"
 #include "../../daemon/tests/support/net_namespace.h"
+#include "../../daemon/tests/support/udpm_probe.h"
 #include "nav/hil/dive_player.h"
 #include "support/sim_dive.h"
 
@@ -40,14 +40,12 @@ struct Images {
 };
 
 TEST(HilCameraNavd, NavdGetsTheDivesFramesAtTheDivesImageTimes) {
-  const nav::tool::test::NetNamespace& net = nav::tool::test::isolated_network();  // before any thread
+  const nav::tool::test::NetNamespace& net =
+      nav::tool::test::isolated_network();  // before any thread
   const std::string netns_error = net.ok ? "" : net.reason;
   if (!netns_error.empty()) GTEST_SKIP() << "no private network namespace: " << netns_error;
   const fs::path dir = nav::sim::test::scratch_dir("hil_camera_navd");
-  nav::sim::SimOptions so;
-  so.out_dir = (dir / "dive").string();
-  so.seed = 3;
-  so.mission.images = 3;
+  nav::sim::SimOptions so = nav::sim::test::sim_options((dir / "dive"), 3, 3);
   so.render_images = true;
   nav::sim::simulate_dive(so, nav::sim::test::sim_config_path().string());
   std::vector<navlcm::image_metadata_t> dive;

@@ -29,9 +29,10 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
-#include "../../daemon/tests/support/udpm_probe.h"
 #include "../../daemon/tests/support/navd_process.h"
 #include "../../daemon/tests/support/net_namespace.h"
+#include "../../daemon/tests/support/udpm_probe.h"
+#include "nav/daemon/host_clock.h"
 #include "nav/hil/dive_player.h"
 #include "support/oracle_vision.h"
 #include "support/sim_dive.h"
@@ -147,22 +148,14 @@ std::map<std::string, double> record_rates(const std::vector<navlcm::health_t>& 
   return rates;
 }
 
-std::int64_t realtime_now_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
 TEST(HilPlayback, NavdOnPlayedPtysTracksTheTruthAndReportsHealthyRates) {
-  const nav::tool::test::NetNamespace& net = nav::tool::test::isolated_network();  // before any thread
+  const nav::tool::test::NetNamespace& net =
+      nav::tool::test::isolated_network();  // before any thread
   const std::string netns_error = net.ok ? "" : net.reason;
   if (!netns_error.empty())
     std::printf("no private network namespace (%s): host network\n", netns_error.c_str());
   const fs::path dir = nav::sim::test::scratch_dir("hil_playback");
-  nav::sim::SimOptions so;
-  so.out_dir = (dir / "dive").string();
-  so.seed = 3;
-  so.mission.images = 5;
+  nav::sim::SimOptions so = nav::sim::test::sim_options((dir / "dive"), 3, 5);
   so.sensor_errors.dvl_dropouts_per_hour = 0.0;  // dead reckoning all through: a pose check
   const nav::sim::SimSummary sim =
       nav::sim::simulate_dive(so, nav::sim::test::sim_config_path().string());
@@ -184,7 +177,7 @@ TEST(HilPlayback, NavdOnPlayedPtysTracksTheTruthAndReportsHealthyRates) {
   po.fake_gige_camera = netns_error.empty();
   std::atomic<std::int64_t> played_from_utime{0};
   po.on_start = [&](std::int64_t dive_start_us, std::int64_t host_start_us) {
-    played_from_utime.store(realtime_now_us());
+    played_from_utime.store(nav::daemon::realtime_us());
     oracle.set_mapping(dive_start_us, host_start_us);
   };
   if (udpm) po.registration_lcm_url = kUdpmUrl;
@@ -213,7 +206,7 @@ TEST(HilPlayback, NavdOnPlayedPtysTracksTheTruthAndReportsHealthyRates) {
     else
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  const std::int64_t played_to_utime = realtime_now_us();
+  const std::int64_t played_to_utime = nav::daemon::realtime_us();
   stop.store(true);
   play.join();
   for (int i = 0; i < 10 && udpm; ++i) lcm.handleTimeout(20);

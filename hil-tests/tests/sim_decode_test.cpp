@@ -184,10 +184,7 @@ Residuals decode_dive(const std::filesystem::path& dir, const SimSummary& s,
 }
 
 SimSummary simulate(const std::filesystem::path& dir, const SensorErrorOptions& errors) {
-  SimOptions o;
-  o.out_dir = dir.string();
-  o.seed = kSeed;
-  o.mission.images = kImages;
+  SimOptions o = sim_options(dir, kSeed, kImages);
   o.sensor_errors = errors;
   return simulate_dive(o, sim_config_path().string());
 }

@@ -13,10 +13,7 @@ namespace {
 const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
 
 SimSummary simulate(const std::filesystem::path& dir, std::uint64_t seed, int images) {
-  SimOptions o;
-  o.out_dir = dir.string();
-  o.seed = seed;
-  o.mission.images = images;
+  SimOptions o = sim_options(dir, seed, images);
   return simulate_dive(o, sim_config_path().string());
 }
 
@@ -53,10 +50,7 @@ TEST(SimDeterminism, NavtoolSimulateWritesTheDiveDirectoryAndPrintsSimJson) {
   EXPECT_EQ(file_text(dir / "config.yaml"), file_text(sim_config_path()));
   // The library call with the same options writes the same log.
   const auto lib = scratch_dir("navtool_lib");
-  SimOptions o;
-  o.out_dir = lib.string();
-  o.seed = 3;
-  o.mission.images = 20;
+  SimOptions o = sim_options(lib, 3, 20);
   o.oracle.outlier_rate = 0.1;
   simulate_dive(o, sim_config_path().string());
   EXPECT_TRUE(file_text(lib / "dive.lcmlog") == file_text(dir / "dive.lcmlog"));

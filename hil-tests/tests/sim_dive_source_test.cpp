@@ -28,10 +28,7 @@ double wrap(double a) { return std::remainder(a, 2.0 * std::numbers::pi); }
 
 TEST(SimDiveSource, EveryMessageDecodesOntoTheSimulatorsClockAndTruth) {
   const auto dir = scratch_dir("dive_source");
-  SimOptions options;
-  options.out_dir = dir.string();
-  options.seed = 5;
-  options.mission.images = 12;
+  SimOptions options = sim_options(dir, 5, 12);
   const SimSummary summary = simulate_dive(options, sim_config_path().string());
   const daemon::NavdConfig config = daemon::load_config_file((dir / "config.yaml").string());
   const TruthTable truth = read_truth(dir);

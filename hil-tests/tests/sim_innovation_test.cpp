@@ -26,10 +26,7 @@ const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchClea
 const std::filesystem::path& clean_dive() {
   static const std::filesystem::path dir = [] {
     const auto d = scratch_dir("innovation");
-    SimOptions o;
-    o.out_dir = d.string();
-    o.seed = 3;
-    o.mission.images = 40;
+    SimOptions o = sim_options(d, 3, 40);
     o.sensor_errors = SensorErrorOptions::ideal();
     (void)simulate_dive(o, sim_config_path().string());
     return d;

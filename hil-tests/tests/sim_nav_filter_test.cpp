@@ -75,10 +75,7 @@ FilterRun run_filter(const std::filesystem::path& dir, bool links, bool recovery
 
 TEST(SimNavFilter, LinksBoundTheDriftOfDeadReckoning) {
   const auto dir = scratch_dir("filter");
-  SimOptions o;
-  o.out_dir = dir.string();
-  o.seed = 4;
-  o.mission.images = 150;
+  SimOptions o = sim_options(dir, 4, 150);
   simulate_dive(o, sim_config_path().string());
   const FilterRun dr = run_filter(dir, false);
   const FilterRun slam = run_filter(dir, true);
@@ -98,24 +95,21 @@ TEST(SimNavFilter, LinksBoundTheDriftOfDeadReckoning) {
   EXPECT_EQ(slam.counters.outliers_accepted, 0u);
 }
 
-// The recovery thread (the default) against synchronous recovery on the same simulated dive:
-// stated tolerance 5 cm on the final and the largest xy error, link decisions within 3 %,
-// no outlier accepted by either.
+// The recovery thread (opt-in: filter.recovery_thread) against synchronous recovery on the same
+// simulated dive: stated tolerance 5 cm on the final and the largest xy error, link decisions
+// within 3 %, no outlier accepted by either.
 TEST(SimNavFilter, RecoveryThreadAgreesWithSynchronousRecovery) {
   const auto dir = scratch_dir("filter-thread");
-  SimOptions o;
-  o.out_dir = dir.string();
-  o.seed = 4;
-  o.mission.images = 100;
+  SimOptions o = sim_options(dir, 4, 100);
   simulate_dive(o, sim_config_path().string());
   const FilterRun threaded = run_filter(dir, true, true);
   const FilterRun sync = run_filter(dir, true, false);
-  std::printf("thread: final %.3f m, max %.3f m, links %llu; synchronous: final %.3f m, max "
-              "%.3f m, links %llu\n",
-              threaded.final_xy_error_m, threaded.max_xy_error_m,
-              static_cast<unsigned long long>(threaded.counters.links_accepted),
-              sync.final_xy_error_m, sync.max_xy_error_m,
-              static_cast<unsigned long long>(sync.counters.links_accepted));
+  std::printf(
+      "thread: final %.3f m, max %.3f m, links %llu; synchronous: final %.3f m, max "
+      "%.3f m, links %llu\n",
+      threaded.final_xy_error_m, threaded.max_xy_error_m,
+      static_cast<unsigned long long>(threaded.counters.links_accepted), sync.final_xy_error_m,
+      sync.max_xy_error_m, static_cast<unsigned long long>(sync.counters.links_accepted));
   EXPECT_NEAR(threaded.final_xy_error_m, sync.final_xy_error_m, 0.05);
   EXPECT_NEAR(threaded.max_xy_error_m, sync.max_xy_error_m, 0.05);
   const auto lt = static_cast<double>(threaded.counters.links_accepted);

@@ -50,10 +50,7 @@ std::pair<double, double> mean_chi2_interval(int dof, int seeds, double confiden
 
 PoseNees newest_state_nees(std::uint64_t seed, const SensorErrorOptions& errors) {
   const auto dir = scratch_dir("nees_" + std::to_string(seed));
-  SimOptions o;
-  o.out_dir = dir.string();
-  o.seed = seed;
-  o.mission.images = kImages;
+  SimOptions o = sim_options(dir, seed, kImages);
   o.sensor_errors = errors;
   simulate_dive(o, sim_config_path().string());
   // The dive's config.yaml is config/sim.yaml as shipped (simulate_dive copies it).

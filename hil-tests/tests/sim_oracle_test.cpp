@@ -29,10 +29,7 @@ struct Dive {
 Dive simulate(const std::string& name, double outlier_rate, int images) {
   Dive d;
   d.dir = scratch_dir(name);
-  SimOptions o;
-  o.out_dir = d.dir.string();
-  o.seed = 5;
-  o.mission.images = images;
+  SimOptions o = sim_options(d.dir, 5, images);
   o.oracle.outlier_rate = outlier_rate;
   d.summary = simulate_dive(o, sim_config_path().string());
   std::string header;

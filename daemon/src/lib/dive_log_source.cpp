@@ -12,15 +12,10 @@
 #include <thread>
 
 #include "nav/daemon/dive_log.h"
+#include "nav/daemon/host_clock.h"
 
 namespace nav::daemon {
 namespace {
-
-std::int64_t monotonic_now_us() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return std::int64_t{ts.tv_sec} * 1'000'000 + ts.tv_nsec / 1000;
-}
 
 bool same_ignoring_case(std::string_view a, std::string_view b) {
   return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
@@ -57,13 +52,12 @@ class Pacer {
     if (!started_) {
       started_ = true;
       log_start_us_ = t_us;
-      wall_start_us_ = monotonic_now_us();
+      wall_start_us_ = monotonic_us();
     }
     const double log_elapsed_us = static_cast<double>(std::max(t_us - log_start_us_, latest_));
     latest_ = static_cast<std::int64_t>(log_elapsed_us);
     const std::int64_t due_us = wall_start_us_ + std::llround(log_elapsed_us / options_.speed);
-    for (std::int64_t now = monotonic_now_us(); now < due_us && !stop_.load();
-         now = monotonic_now_us()) {
+    for (std::int64_t now = monotonic_us(); now < due_us && !stop_.load(); now = monotonic_us()) {
       std::this_thread::sleep_for(microseconds(std::min<std::int64_t>(due_us - now, 10'000)));
     }
   }

@@ -8,16 +8,12 @@
 #include <fstream>
 #include <sstream>
 
+#include "nav/daemon/host_clock.h"
+
 namespace nav::daemon {
 namespace {
 
 constexpr double kKbPerMb = 1024.0;
-
-std::int64_t monotonic_now_us() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
-}
 
 /// Skips `n` space-separated fields of `s` from `pos`; npos if there are fewer.
 std::size_t skip_fields(std::string_view s, std::size_t pos, int n) {
@@ -90,7 +86,7 @@ std::optional<ProcessUsageSample> read_process_usage(std::string* error) {
     return std::nullopt;
   };
   ProcessUsageSample sample;
-  sample.wall_us = monotonic_now_us();
+  sample.wall_us = monotonic_us();
   const std::optional<std::string> stat = read_file("/proc/self/stat");
   if (!stat) return fail("/proc/self/stat: cannot read");
   const std::optional<double> cpu = parse_proc_stat_cpu_s(*stat, sysconf(_SC_CLK_TCK));

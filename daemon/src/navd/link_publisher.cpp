@@ -7,7 +7,7 @@
 #include <navlcm/camera_link_t.hpp>
 #include <navlcm/delayed_state_bound_t.hpp>
 
-#include "navd/clock.h"
+#include "nav/daemon/host_clock.h"
 
 namespace nav::navd {
 
@@ -23,7 +23,7 @@ void LinkPublisher::on_measurement(const daemon::NavFilter& filter) {
     publish_bound(filter, images[images_seen_].state);
     ++images_seen_;
   }
-  const std::int64_t now = monotonic_us();
+  const std::int64_t now = daemon::monotonic_us();
   if (now >= next_snapshot_us_) {
     if (next_snapshot_us_ != 0) publish_snapshot(filter);
     next_snapshot_us_ = now + static_cast<std::int64_t>(1e6 / config_.bounds_snapshot.rate_hz);
@@ -38,7 +38,7 @@ void LinkPublisher::publish_links(const daemon::NavFilter& filter) {
   while (links_seen_ < links.size() && links[links_seen_].state_j >= 0) {
     const daemon::LinkRecord& l = links[links_seen_++];
     navlcm::camera_link_t msg{};
-    msg.utime = realtime_us();
+    msg.utime = daemon::realtime_us();
     msg.state_id_i = l.state_i;
     msg.state_id_j = l.state_j;
     for (int r = 0; r < 5; ++r) {
@@ -69,7 +69,7 @@ namespace {
 navlcm::delayed_state_bound_t bound_message(const daemon::NavFilter& filter, int state,
                                             int tightenings) {
   navlcm::delayed_state_bound_t msg{};
-  msg.utime = realtime_us();
+  msg.utime = daemon::realtime_us();
   msg.state_id = state;
   const daemon::ImageRecord* image = filter.image_of_state(state);
   msg.image_time_us = image ? image->t_us : 0;
@@ -100,7 +100,7 @@ void LinkPublisher::publish_bound(const daemon::NavFilter& filter, int state) {
 
 void LinkPublisher::publish_snapshot(const daemon::NavFilter& filter) {
   navlcm::bounds_snapshot_t msg{};
-  msg.utime = realtime_us();
+  msg.utime = daemon::realtime_us();
   for (int b = 1; b < filter.esdf().num_blocks(); ++b) {
     if (!filter.bounds().contains(b)) continue;
     const int t = static_cast<std::size_t>(b) < tightenings_.size()

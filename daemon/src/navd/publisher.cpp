@@ -8,7 +8,7 @@
 #include <navlcm/nav_solution_t.hpp>
 #include <thread>
 
-#include "navd/clock.h"
+#include "nav/daemon/host_clock.h"
 
 namespace nav::navd {
 namespace {
@@ -26,10 +26,10 @@ Publisher::~Publisher() = default;
 bool Publisher::good() const { return lcm_->good(); }
 
 PublisherCounters Publisher::run(const std::atomic<bool>& stop) {
-  std::int64_t next_solution_us = monotonic_us();
+  std::int64_t next_solution_us = daemon::monotonic_us();
   std::int64_t next_health_us = next_solution_us;
   while (!stop.load()) {
-    const std::int64_t now = monotonic_us();
+    const std::int64_t now = daemon::monotonic_us();
     if (now >= next_solution_us || now >= next_health_us) {
       const SolutionView view = board_.read();
       if (now >= next_solution_us && view.has_estimate) publish_solution(view);
@@ -50,7 +50,7 @@ PublisherCounters Publisher::run(const std::atomic<bool>& stop) {
 void Publisher::publish_solution(const SolutionView& view) {
   if (!good()) return;
   navlcm::nav_solution_t msg{};
-  msg.utime = realtime_us();
+  msg.utime = daemon::realtime_us();
   msg.time_of_validity_us = view.time_of_validity_us;
   for (int i = 0; i < 3; ++i) {
     msg.p_world_m[i] = view.robot_mean(i);
@@ -74,9 +74,10 @@ void Publisher::publish_solution(const SolutionView& view) {
 void Publisher::publish_health(const SolutionView& view) {
   if (!good()) return;
   navlcm::health_t msg{};
-  msg.utime = realtime_us();
-  if (sensors_ != nullptr) msg.sensors = sensors_->snapshot(monotonic_us());  // device threads
-  innovations_.fill(msg.sensors, view.innovations);  // and every sensor the filter used
+  msg.utime = daemon::realtime_us();
+  if (sensors_ != nullptr)
+    msg.sensors = sensors_->snapshot(daemon::monotonic_us());  // device threads
+  innovations_.fill(msg.sensors, view.innovations);            // and every sensor the filter used
   msg.num_sensors = static_cast<std::int32_t>(msg.sensors.size());
   msg.queue_depth = static_cast<std::int32_t>(queue_.size());
   msg.queue_capacity = static_cast<std::int32_t>(queue_.capacity());

@@ -7,8 +7,8 @@
 #include <navlcm/link_proposal_t.hpp>
 #include <navlcm/registration_t.hpp>
 
+#include "nav/daemon/host_clock.h"
 #include "nav/daemon/sources/camera_source.h"
-#include "navd/clock.h"
 
 namespace nav::navd {
 RegistrationListener::RegistrationListener(const daemon::LcmConfig& config,
@@ -58,7 +58,7 @@ void LinkProposalPublisher::on_measurement(const daemon::NavFilter& filter) {
   for (const daemon::PendingRegistration& p : filter.pending_registrations()) {
     if (p.sequence <= last_sequence_) continue;
     navlcm::link_proposal_t msg{};
-    msg.utime = realtime_us();
+    msg.utime = daemon::realtime_us();
     msg.sequence = static_cast<std::int64_t>(p.sequence);
     msg.frame_id_i = static_cast<std::int64_t>(p.frame_i);
     msg.frame_id_j = static_cast<std::int64_t>(p.frame_j);

@@ -8,13 +8,13 @@
 #include <filesystem>
 #include <thread>
 
+#include "nav/daemon/host_clock.h"
 #include "nav/daemon/measurement_queue.h"
 #include "nav/daemon/replay/replay.h"
 #include "navd/lcm_url.h"
 #include "navd/link_publisher.h"
-#include "navd/solution_board.h"
 #include "navd/publisher.h"
-#include "navd/clock.h"
+#include "navd/solution_board.h"
 #include "report/report.h"
 
 namespace nav::navd {
@@ -72,7 +72,7 @@ int run_replay_mode(const daemon::NavdConfig& config, const ReplayModeArgs& args
   options.after_measurement = [&](const daemon::NavFilter& filter) {
     map_publisher.on_measurement(filter);
     const auto period = notifier.watchdog_period();
-    const std::int64_t now = monotonic_us();
+    const std::int64_t now = daemon::monotonic_us();
     if (period && now - last_watchdog_us >= period->count()) {
       notifier.watchdog();
       last_watchdog_us = now;

@@ -3,19 +3,20 @@
 // vehicle's sensors before a dive and to feed `lcm-logger` (RAW_<NAME>, NAV_IMAGE) when recording
 // a dive without navd. Measurements are decoded and counted, then discarded. Ends after the
 // duration or on SIGINT/SIGTERM and prints one JSON object with each device sensor's health.
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
 #include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <ctime>
 #include <lcm/lcm-cpp.hpp>
-#include <spdlog/sinks/stdout_color_sinks.h>
-#include <spdlog/spdlog.h>
-
 #include <nlohmann/json.hpp>
 #include <thread>
 
 #include "nav/daemon/config.h"
+#include "nav/daemon/host_clock.h"
 #include "nav/daemon/sources/device_sources.h"
 #include "navtool/commands.h"
 
@@ -28,12 +29,6 @@ struct SensorsArgs {
   std::string lcm_url;
 };
 
-std::int64_t monotonic_us() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return std::int64_t{ts.tv_sec} * 1'000'000 + ts.tv_nsec / 1000;
-}
-
 /// Waits for the duration (0: forever) or SIGINT/SIGTERM (blocked in every thread).
 void wait_for_end(double duration_s) {
   sigset_t set;
@@ -41,8 +36,8 @@ void wait_for_end(double duration_s) {
   sigaddset(&set, SIGTERM);
   sigaddset(&set, SIGINT);
   const timespec tick{0, 20'000'000};
-  const std::int64_t start = monotonic_us();
-  while (duration_s <= 0.0 || (monotonic_us() - start) * 1e-6 < duration_s) {
+  const std::int64_t start = daemon::monotonic_us();
+  while (duration_s <= 0.0 || (daemon::monotonic_us() - start) * 1e-6 < duration_s) {
     if (sigtimedwait(&set, nullptr, &tick) > 0) return;
   }
 }
@@ -95,7 +90,7 @@ void run_sensors(const SensorsArgs& args) {
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
   });
-  const std::int64_t start_us = monotonic_us();
+  const std::int64_t start_us = daemon::monotonic_us();
   health.snapshot(start_us);
   const std::size_t threads = sources.start(stop);
   if (threads == 0)
@@ -111,7 +106,8 @@ void run_sensors(const SensorsArgs& args) {
                         {"measurements", measurements},
                         {"raw_published", sources.publisher().published()},
                         {"sensors", nlohmann::json::array()}};
-  for (const auto& h : health.snapshot(monotonic_us())) out["sensors"].push_back(health_json(h));
+  for (const auto& h : health.snapshot(daemon::monotonic_us()))
+    out["sensors"].push_back(health_json(h));
   std::printf("%s\n", out.dump().c_str());
 }
 

@@ -85,8 +85,8 @@ void CameraPlayback::run() {
       camera_.fire(std::move(frame), due_us);
     }
     // Let the last frame go out (the fake acts on a trigger within ~100 ms of its due time).
-    const std::int64_t give_up_us = monotonic_now_us() + lead_us_ + 1'000'000;
-    while (!stop_.load() && !camera_.idle() && monotonic_now_us() < give_up_us)
+    const std::int64_t give_up_us = daemon::monotonic_us() + lead_us_ + 1'000'000;
+    while (!stop_.load() && !camera_.idle() && daemon::monotonic_us() < give_up_us)
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
   } catch (const std::exception& e) {
     spdlog::error("hil camera playback: {}", e.what());

@@ -87,7 +87,7 @@ struct DivePlayer::Impl {
 };
 
 bool DivePlayer::Impl::publish_registration(navlcm::registration_t r) {
-  r.utime = realtime_now_us();
+  r.utime = daemon::realtime_us();
   return registration_lcm->publish(options.registration_channel, &r) == 0;
 }
 
@@ -151,10 +151,11 @@ void DivePlayer::Impl::plan_camera(const daemon::SensorConfig& sensor, PlayedSen
 }
 
 bool DivePlayer::Impl::wait_for_readers(const std::atomic<bool>& stop) const {
-  const std::int64_t give_up_us = options.reader_timeout.count() > 0
-                                      ? monotonic_now_us() + options.reader_timeout.count() * 1000
-                                      : INT64_MAX;
-  while (!stop.load() && monotonic_now_us() < give_up_us) {
+  const std::int64_t give_up_us =
+      options.reader_timeout.count() > 0
+          ? daemon::monotonic_us() + options.reader_timeout.count() * 1000
+          : INT64_MAX;
+  while (!stop.load() && daemon::monotonic_us() < give_up_us) {
     const bool all = std::all_of(ptys.begin(), ptys.end(),
                                  [](const auto& p) { return p.second->reader_attached(); });
     if (all) return true;
@@ -166,7 +167,7 @@ bool DivePlayer::Impl::wait_for_readers(const std::atomic<bool>& stop) const {
 void DivePlayer::Impl::start_clock(std::int64_t dive_us, PlayReport& report) const {
   report.started = true;
   report.dive_start_us = dive_us;
-  report.host_start_us = monotonic_now_us();
+  report.host_start_us = daemon::monotonic_us();
   if (camera_playback) camera_playback->start(dive_us, report.host_start_us, options.speed);
   if (options.on_start) options.on_start(report.dive_start_us, report.host_start_us);
 }
@@ -267,7 +268,7 @@ PlayReport DivePlayer::play(const std::atomic<bool>& stop) {
     const std::int64_t due_us = report.host_start_us + std::llround(offset_us / speed);
     sleep_until_us(due_us, stop);
     if (stop.load()) break;
-    last_write_us = monotonic_now_us();
+    last_write_us = daemon::monotonic_us();
     report.max_late_s = std::max(report.max_late_s, (last_write_us - due_us) * 1e-6);
     if (last_write_us - due_us > 10'000) ++report.late_writes;
     if (impl_->write_raw(*raw, report)) last_dive_us = raw->host_monotonic_us;

@@ -22,7 +22,7 @@ namespace {
 constexpr std::int64_t kMaxHoldUs = 1'000'000;
 
 void sleep_until_monotonic_us(std::int64_t until_us) {
-  const std::int64_t now = monotonic_now_us();
+  const std::int64_t now = daemon::monotonic_us();
   until_us = std::min(until_us, now + kMaxHoldUs);
   if (until_us <= now) return;
   const timespec ts{static_cast<time_t>(until_us / 1'000'000),
@@ -179,7 +179,7 @@ void FakeGigeCamera::fill_buffer(_ArvBuffer* buffer, std::uint32_t pixel_format)
   const size_t capacity = arv_fake_camera_get_payload(fake_of(camera_));
   if (data != nullptr) std::memcpy(data, bytes.data(), std::min(capacity, bytes.size()));
   if (!asked) return;
-  const double late_s = (monotonic_now_us() - due_us) * 1e-6;
+  const double late_s = (daemon::monotonic_us() - due_us) * 1e-6;
   std::lock_guard lock(mutex_);
   ++stats_.sent;
   if (!image.empty()) ++stats_.from_image;

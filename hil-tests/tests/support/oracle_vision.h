@@ -25,6 +25,7 @@
 #include "nav/core/geometry/pose.h"
 #include "nav/daemon/config.h"
 #include "nav/daemon/filter/sensor_models.h"
+#include "nav/daemon/host_clock.h"
 #include "sim_dive.h"
 
 namespace nav::hil::test {
@@ -63,9 +64,7 @@ class OracleVision {
       r.measurement[k] = std::remainder(z(k) + sd[k] * n01_(rng_), 2.0 * M_PI);
       for (int l = 0; l < 5; ++l) r.covariance[k * 5 + l] = k == l ? sd[k] * sd[k] : 0.0;
     }
-    timespec ts{};
-    ::clock_gettime(CLOCK_REALTIME, &ts);
-    r.utime = static_cast<std::int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
+    r.utime = daemon::realtime_us();
     if (lcm_.publish("NAV_REGISTRATION", &r) == 0) {
       ++answered;
       if (r.success) ++succeeded;

@@ -31,6 +31,15 @@ inline std::filesystem::path scratch_dir(const std::string& name) {
   return dir;
 }
 
+/// Simulator options writing the dive to `dir`, with `seed` and `images` (the rest default).
+inline SimOptions sim_options(const std::filesystem::path& dir, std::uint64_t seed, int images) {
+  SimOptions o;
+  o.out_dir = dir.string();
+  o.seed = seed;
+  o.mission.images = images;
+  return o;
+}
+
 /// Removes /tmp/nav_sim_test_<pid> at the end of the test program.
 struct ScratchCleanup : ::testing::Environment {
   void TearDown() override {

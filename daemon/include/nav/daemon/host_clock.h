@@ -1,9 +1,10 @@
 #pragma once
-// CLOCK_MONOTONIC / CLOCK_REALTIME in microseconds (navd's publishers and pacing).
+// The host clocks in microseconds: CLOCK_MONOTONIC (what measurements are stamped with on
+// receipt, pacing) and CLOCK_REALTIME (LCM utimes).
 #include <cstdint>
 #include <ctime>
 
-namespace nav::navd {
+namespace nav::daemon {
 
 inline std::int64_t clock_us(clockid_t id) {
   timespec ts{};
@@ -13,4 +14,4 @@ inline std::int64_t clock_us(clockid_t id) {
 inline std::int64_t monotonic_us() { return clock_us(CLOCK_MONOTONIC); }
 inline std::int64_t realtime_us() { return clock_us(CLOCK_REALTIME); }
 
-}  // namespace nav::navd
+}  // namespace nav::daemon
