@@ -3,7 +3,9 @@
 // every-byte splits of real ensembles.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <optional>
 #include <sstream>
@@ -202,6 +204,174 @@ TEST(Pd0RealData, WinRiverFileDecodesCompletely) {
   }
   EXPECT_EQ(bt_valid, 251u);
   expect_reencode_round_trip(ensembles);
+}
+
+/// A checksum-valid ensemble found in a file: its first byte and its byte count N.
+struct ScannedEnsemble {
+  std::size_t at = 0;
+  std::size_t n = 0;
+};
+
+uint16_t le16_at(const std::vector<uint8_t>& bytes, std::size_t i) {
+  return uint16_t(bytes[i] | (bytes[i + 1] << 8));
+}
+
+/// Independent of the decoder: every 0x7F 0x7F whose byte count N and checksum (sum of the N
+/// bytes mod 65536) hold; a valid ensemble's bytes are consumed, as by any decoder.
+std::vector<ScannedEnsemble> scan_checksum_valid(const std::vector<uint8_t>& bytes) {
+  std::vector<ScannedEnsemble> found;
+  std::size_t p = 0;
+  while (p + 4 <= bytes.size()) {
+    if (bytes[p] == 0x7F && bytes[p + 1] == 0x7F) {
+      const std::size_t n = le16_at(bytes, p + 2);
+      if (n >= 6 && p + n + 2 <= bytes.size()) {
+        uint32_t sum = 0;
+        for (std::size_t i = p; i < p + n; ++i) sum += bytes[i];
+        if ((sum & 0xFFFF) == le16_at(bytes, p + n)) {
+          found.push_back({p, n});
+          p += n + 2;
+          continue;
+        }
+      }
+    }
+    ++p;
+  }
+  return found;
+}
+
+/// The data type IDs of an ensemble in offset-table order.
+std::vector<uint16_t> table_ids(const std::vector<uint8_t>& bytes, const ScannedEnsemble& e) {
+  std::vector<uint16_t> ids;
+  for (std::size_t k = 0; k < bytes[e.at + 5]; ++k) {
+    ids.push_back(le16_at(bytes, e.at + le16_at(bytes, e.at + 6 + 2 * k)));
+  }
+  return ids;
+}
+
+/// The IDs a decoder that decodes the first fixed leader, variable leader and bottom track
+/// must report as skipped.
+std::vector<uint16_t> expected_skipped_ids(const std::vector<uint16_t>& ids) {
+  std::vector<uint16_t> skipped;
+  bool fixed = false, variable = false, bottom = false;
+  for (uint16_t id : ids) {
+    bool* first = id == 0x0000   ? &fixed
+                  : id == 0x0080 ? &variable
+                  : id == 0x0600 ? &bottom
+                                 : nullptr;
+    if (first && !*first) {
+      *first = true;
+    } else {
+      skipped.push_back(id);
+    }
+  }
+  return skipped;
+}
+
+/// IDs outside the WorkHorse PD0 table (leaders, profiles 0x0100..0x0500, bottom track).
+std::size_t count_unknown(const std::vector<uint16_t>& ids) {
+  return std::size_t(std::count_if(ids.begin(), ids.end(), [](uint16_t id) {
+    return id != 0x0000 && id != 0x0080 && !(id >= 0x0100 && id <= 0x0600 && (id & 0xFF) == 0);
+  }));
+}
+
+TEST(Pd0RealData, WinRiverEveryChecksumValidEnsembleIsDecoded) {
+  NAV_REQUIRE_DATA(path, "dvl/winriver01.PD0");
+  const std::vector<uint8_t> bytes = read_file(path);
+  const std::vector<ScannedEnsemble> scanned = scan_checksum_valid(bytes);
+  ASSERT_EQ(scanned.size(), 262u);
+  Pd0Decoder decoder;
+  std::vector<Pd0Ensemble> out;
+  for (std::size_t i = 0; i < bytes.size(); i += 777) {
+    decoder.feed({bytes.data() + i, std::min<std::size_t>(777, bytes.size() - i)}, kHost, out);
+  }
+  ASSERT_EQ(out.size(), scanned.size());
+  EXPECT_EQ(decoder.stats().malformed, 0u);
+  EXPECT_EQ(decoder.stats().checksum_failures, 0u);
+  EXPECT_EQ(decoder.stats().unsupported, 0u);
+  EXPECT_EQ(decoder.stats().dropped_bytes, 0u);
+  std::size_t skipped = 0, unknown = 0, with_navigation = 0;
+  for (std::size_t i = 0; i < scanned.size(); ++i) {
+    const std::vector<uint16_t> ids = table_ids(bytes, scanned[i]);
+    const std::vector<uint16_t> expected = expected_skipped_ids(ids);
+    EXPECT_EQ(out[i].skipped_type_ids, expected) << "ensemble at byte " << scanned[i].at;
+    skipped += expected.size();
+    unknown += count_unknown(ids);
+    with_navigation += std::count(ids.begin(), ids.end(), uint16_t(0x2022)) > 0;
+  }
+  EXPECT_EQ(with_navigation, 34u);  // WinRiver navigation 0x2022 and NMEA 0x2101 in these
+  EXPECT_EQ(decoder.skipped_types().total, skipped);
+  EXPECT_EQ(decoder.skipped_types().unknown, unknown);
+  EXPECT_EQ(unknown, 2u * 34);
+}
+
+/// `ensemble` (header to checksum) with `copies` more copies of `type` (ID and body) appended
+/// after its last data type: offset table, byte count and checksum rewritten.
+std::vector<uint8_t> with_copies(const std::vector<uint8_t>& ensemble,
+                                 const std::vector<uint8_t>& type, std::size_t copies) {
+  const std::size_t count = ensemble[5], n = le16_at(ensemble, 2);
+  const std::size_t shift = 2 * copies;  // the offset table grows
+  std::vector<uint8_t> out(ensemble.begin(), ensemble.begin() + 6);
+  out[5] = uint8_t(count + copies);
+  const auto put16 = [&out](std::size_t v) {
+    out.insert(out.end(), {uint8_t(v), uint8_t(v >> 8)});
+  };
+  for (std::size_t k = 0; k < count; ++k) put16(le16_at(ensemble, 6 + 2 * k) + shift);
+  for (std::size_t j = 0; j < copies; ++j) put16(n + shift + j * type.size());
+  out.insert(out.end(), ensemble.begin() + std::ptrdiff_t(6 + 2 * count),
+             ensemble.begin() + std::ptrdiff_t(n));
+  for (std::size_t j = 0; j < copies; ++j) out.insert(out.end(), type.begin(), type.end());
+  out[2] = uint8_t(out.size());
+  out[3] = uint8_t(out.size() >> 8);
+  out.resize(out.size() + 2);
+  fix_checksum(out);
+  return out;
+}
+
+TEST(Pd0RealData, WinRiverEnsembleWithManyNavigationTypesIsDecoded) {
+  // A real WinRiver ensemble (9 types, one GPS fix 0x2022 of 71 bytes) given 26, 59 or 246
+  // more copies of its 0x2022 type, as WinRiver writes one per fix: 35, 68 and 255 types.
+  NAV_REQUIRE_DATA(path, "dvl/winriver01.PD0");
+  const std::vector<uint8_t> bytes = read_file(path);
+  const std::vector<ScannedEnsemble> scanned = scan_checksum_valid(bytes);
+  std::size_t i = 0;
+  while (i < scanned.size() && count_unknown(table_ids(bytes, scanned[i])) == 0) ++i;
+  ASSERT_TRUE(i > 0 && i + 1 < scanned.size());
+  const auto slice = [&bytes](const ScannedEnsemble& e) {
+    return std::vector<uint8_t>(bytes.begin() + std::ptrdiff_t(e.at),
+                                bytes.begin() + std::ptrdiff_t(e.at + e.n + 2));
+  };
+  const std::vector<uint8_t> original = slice(scanned[i]);
+  const std::vector<uint16_t> ids = table_ids(bytes, scanned[i]);
+  ASSERT_EQ(ids.size(), 9u);
+  ASSERT_EQ(ids[7], 0x2022);  // located by its offset and the next one
+  const std::size_t nav_at = le16_at(original, 6 + 2 * 7), nav_end = le16_at(original, 6 + 2 * 8);
+  const std::vector<uint8_t> navigation(original.begin() + std::ptrdiff_t(nav_at),
+                                        original.begin() + std::ptrdiff_t(nav_end));
+  ASSERT_EQ(navigation.size(), 71u);
+  Pd0Decoder reference_decoder;
+  const auto reference = decode_all(original, reference_decoder);
+  ASSERT_EQ(reference.size(), 1u);
+
+  for (const std::size_t types : {35u, 68u, 255u}) {
+    SCOPED_TRACE(::testing::Message() << types << " data types");
+    const std::vector<uint8_t> many = with_copies(original, navigation, types - ids.size());
+    ASSERT_EQ(many[5], types);
+    std::vector<uint8_t> stream = slice(scanned[i - 1]);  // between its real neighbours
+    append(stream, many);
+    append(stream, slice(scanned[i + 1]));
+    Pd0Decoder decoder;
+    const auto out = decode_all(stream, decoder);
+    ASSERT_EQ(out.size(), 3u);
+    EXPECT_EQ(decoder.stats().malformed, 0u);
+    EXPECT_EQ(decoder.stats().dropped_bytes, 0u);
+    expect_same(out[1], reference[0]);
+    std::vector<uint16_t> expected = reference[0].skipped_type_ids;
+    expected.insert(expected.end(), types - ids.size(), uint16_t(0x2022));
+    EXPECT_EQ(out[1].skipped_type_ids, expected);
+    EXPECT_EQ(decoder.skipped_types().unknown, count_unknown(table_ids(bytes, scanned[i - 1])) + 2 +
+                                                   (types - ids.size()) +
+                                                   count_unknown(table_ids(bytes, scanned[i + 1])));
+  }
 }
 
 TEST(Pd0RealData, SplitAtEveryByteOnRealEnsembles) {

@@ -1,6 +1,6 @@
 // Tests of the RDI PD0 codec on hand-checkable synthetic ensembles: layout, round trip, range
 // checks, framing errors, resynchronisation and every-byte splits. The real recordings are
-// tested in pd0_real_data_test.cpp.
+// tested in pd0_real_data_test.cpp, ensembles with many data types in pd0_data_types_test.cpp.
 #include "nav/drivers/codecs/pd0.h"
 
 #include <gtest/gtest.h>

@@ -1,7 +1,8 @@
 #pragma once
-// Helpers shared by the PD0 codec tests (pd0_test.cpp, pd0_real_data_test.cpp): a fully
-// populated sample ensemble, field-by-field comparison, checksum repair after byte edits and the
-// every-byte split check. Included by relative path from the *_test.cpp beside it; test-only.
+// Helpers shared by the PD0 codec tests (pd0_test.cpp, pd0_real_data_test.cpp,
+// pd0_data_types_test.cpp): a fully populated sample ensemble, field-by-field comparison, checksum
+// repair after byte edits and the every-byte split check. Included by relative path from the
+// *_test.cpp beside it; test-only.
 #include <gtest/gtest.h>
 
 #include <cstdint>
