@@ -143,8 +143,9 @@ std::vector<uint8_t> encode_pd0(const Pd0Ensemble& e, std::span<const Pd0RawData
   p[1] = kHeaderId;
   put16(p + 2, uint16_t(n));
   p[5] = uint8_t(types);
-  for (std::size_t k = 0; k < types; ++k)
+  for (std::size_t k = 0; k < types; ++k) {
     put16(p + kHeaderFixedBytes + 2 * k, uint16_t(offsets[k]));
+  }
   write_fixed(p + offsets[0], e.fixed);
   write_variable(p + offsets[1], e);
   if (e.bottom_track) write_bottom_track(p + offsets[2], *e.bottom_track);

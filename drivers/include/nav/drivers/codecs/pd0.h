@@ -123,9 +123,9 @@ struct Pd0SkippedTypes {
 /// waits for its N bytes) only when its offset table is consistent: first offset right after
 /// the table and pointing at the fixed leader ID 0x0000, offsets increasing and inside N, as
 /// every RDI instrument writes them; this keeps a 0x7F7F in garbage from stalling output. Any
-/// number of data types the format can carry (1..255) is accepted. Every
-/// byte fed ends up either in an emitted ensemble, in `stats().dropped_bytes`, or (at most one
-/// incomplete ensemble) in `buffered_bytes()`. stats().out_of_range counts ensembles in which at
+/// number of data types the format can carry (1..255) is accepted. Every byte fed ends up
+/// either in an emitted ensemble, in `stats().dropped_bytes`, or (at most one incomplete
+/// ensemble) in `buffered_bytes()`. stats().out_of_range counts ensembles in which at
 /// least one value was rejected by its range check; such an ensemble is still emitted with those
 /// values empty. An emitted ensemble's host time is the `received` of the feed() call that
 /// completed it. Not thread-safe; one decoder per stream.
@@ -164,7 +164,7 @@ enum class Pd0ParseError {
 /// Decodes one complete ensemble (header to checksum inclusive; the checksum is not checked
 /// here). Values outside their documented range are left empty and counted in
 /// `out_of_range_fields`. `out` is usable only for kNone and kOutOfRange. The offset table is
-/// read on the stack; the only allocation is `out.skipped_type_ids` (at most 254 IDs).
+/// read on the stack; the only allocation is `out.skipped_type_ids` (at most 253 IDs).
 Pd0ParseError parse_pd0_ensemble(std::span<const uint8_t> ensemble, Pd0Ensemble& out,
                                  int& out_of_range_fields);
 
