@@ -1,7 +1,8 @@
 // libFuzzer target for the PD0 codec. The input is fed whole and in three chunks (split points
 // taken from its first bytes); both must give the same ensembles and counters. Invariants:
-// every byte accounted for, bounded buffer, and every decoded ensemble survives
-// encode -> decode -> encode byte for byte.
+// every byte accounted for, bounded buffer, at most 255 data types per ensemble, the same
+// skipped-type counts, and every decoded ensemble survives encode -> decode -> encode byte for
+// byte, also with its skipped data types re-encoded (empty bodies) in their order.
 #include <cstdint>
 #include <cstdlib>
 #include <span>
@@ -14,6 +15,7 @@ using nav::drivers::HostTime;
 using nav::drivers::Pd0Decoder;
 using nav::drivers::Pd0DecoderOptions;
 using nav::drivers::Pd0Ensemble;
+using nav::drivers::Pd0RawDataType;
 
 namespace {
 
@@ -56,6 +58,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   check(same_stats(s, chunked.stats()));
   check(chunked.buffered_bytes() == whole.buffered_bytes());
   check(out.size() == reference.size());
+  check(chunked.skipped_types().total == whole.skipped_types().total);
+  check(chunked.skipped_types().unknown == whole.skipped_types().unknown);
+  check(whole.skipped_types().unknown <= whole.skipped_types().total);
+  uint64_t skipped = 0;
 
   for (std::size_t i = 0; i < reference.size(); ++i) {
     const std::vector<uint8_t> encoded = nav::drivers::encode_pd0(reference[i]);
@@ -66,6 +72,20 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     check(decoded.size() == 1);
     check(again.stats().dropped_bytes == 0 && again.buffered_bytes() == 0);
     check(nav::drivers::encode_pd0(decoded[0]) == encoded);
+
+    const std::vector<uint16_t>& ids = reference[i].skipped_type_ids;
+    check(ids == out[i].skipped_type_ids);
+    check(ids.size() + (reference[i].bottom_track ? 3 : 2) <= 255);
+    skipped += ids.size();
+    std::vector<Pd0RawDataType> extra;
+    for (uint16_t id : ids) extra.push_back({id, {}});
+    Pd0Decoder with_types;
+    std::vector<Pd0Ensemble> decoded_with_types;
+    with_types.feed(nav::drivers::encode_pd0(reference[i], extra), host, decoded_with_types);
+    check(decoded_with_types.size() == 1);
+    check(decoded_with_types[0].skipped_type_ids == ids);
+    check(nav::drivers::encode_pd0(decoded_with_types[0]) == encoded);
   }
+  check(skipped == whole.skipped_types().total);
   return 0;
 }

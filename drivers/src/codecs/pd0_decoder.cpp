@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstring>
 #include <stdexcept>
+#include <string>
 
 #include "nav/drivers/codecs/pd0.h"
 #include "pd0_wire.h"
@@ -13,14 +14,34 @@ namespace nav::drivers {
 
 using namespace pd0_wire;
 
-bool Pd0DecoderOptions::validate() const {
-  return max_ensemble_bytes >= 64 && max_data_types >= 3 && max_data_types <= 255;
+namespace {
+
+/// True for the data type IDs of the WorkHorse manual's PD0 table: fixed and variable leader,
+/// velocity, correlation, echo intensity, percent good, status and bottom track.
+bool documented_type(uint16_t id) {
+  switch (id) {
+    case kFixedLeaderId:
+    case kVariableLeaderId:
+    case 0x0100:
+    case 0x0200:
+    case 0x0300:
+    case 0x0400:
+    case 0x0500:
+    case kBottomTrackId:
+      return true;
+    default:
+      return false;
+  }
 }
+
+}  // namespace
+
+bool Pd0DecoderOptions::validate() const { return max_ensemble_bytes >= 64; }
 
 Pd0Decoder::Pd0Decoder(Pd0DecoderOptions options) : options_(options) {
   if (!options_.validate()) {
-    throw std::invalid_argument(
-        "Pd0DecoderOptions: max_ensemble_bytes must be >= 64 and max_data_types in [3, 255]");
+    throw std::invalid_argument("Pd0DecoderOptions: max_ensemble_bytes must be >= 64, got " +
+                                std::to_string(options_.max_ensemble_bytes));
   }
   buffer_.reserve(std::min<std::size_t>(options_.max_ensemble_bytes, 1 << 14));
 }
@@ -50,10 +71,9 @@ Pd0Decoder::Step Pd0Decoder::try_decode(const HostTime& received, std::vector<Pd
   if (avail < kHeaderFixedBytes) return Step::kNeedMore;
 
   const std::size_t n = le16(p + 2);
-  const std::size_t types = p[5];
+  const std::size_t types = p[5];  // one byte: every count up to kMaxDataTypes is valid
   const std::size_t table_end = kHeaderFixedBytes + 2 * types;
-  if (types == 0 || types > options_.max_data_types || n < table_end + 2 ||
-      n + kChecksumBytes > options_.max_ensemble_bytes) {
+  if (types == 0 || n < table_end + 2 || n + kChecksumBytes > options_.max_ensemble_bytes) {
     ++stats_.malformed;
     return Step::kDropOne;
   }
@@ -100,6 +120,10 @@ Pd0Decoder::Step Pd0Decoder::try_decode(const HostTime& received, std::vector<Pd
       break;
   }
   out.back().time.host = received;
+  for (uint16_t id : out.back().skipped_type_ids) {
+    ++skipped_types_.total;
+    if (!documented_type(id)) ++skipped_types_.unknown;
+  }
   ++stats_.records;
   start_ += total;
   return Step::kEmitted;

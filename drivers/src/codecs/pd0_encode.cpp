@@ -1,9 +1,13 @@
 // PD0 encoder: header, fixed leader (59 bytes), variable leader (65 bytes) and bottom track
-// (85 bytes) in the layout of "WorkHorse Commands and Output Data Format", PD0 Output Format.
-// Used by tests, fuzzers and the survey simulator; fields it does not model are written 0.
+// (85 bytes) in the layout of "WorkHorse Commands and Output Data Format", PD0 Output Format,
+// then any extra data types verbatim. Used by tests, fuzzers and the survey simulator; fields
+// it does not model are written 0.
+#include <algorithm>
 #include <climits>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+#include <string>
 
 #include "nav/drivers/codecs/pd0.h"
 #include "pd0_wire.h"
@@ -102,24 +106,54 @@ void write_bottom_track(uint8_t* p, const Pd0BottomTrack& bt) {
 
 }  // namespace
 
-std::vector<uint8_t> encode_pd0(const Pd0Ensemble& e) {
-  const std::size_t types = e.bottom_track ? 3 : 2;
-  const std::size_t fixed_at = kHeaderFixedBytes + 2 * types;
-  const std::size_t variable_at = fixed_at + kFixedLeaderBytes;
-  const std::size_t bottom_at = variable_at + kVariableLeaderBytes;
-  const std::size_t n = bottom_at + (e.bottom_track ? kBottomTrackBytes : 0);
+std::vector<uint8_t> encode_pd0(const Pd0Ensemble& e) { return encode_pd0(e, {}); }
+
+std::vector<uint8_t> encode_pd0(const Pd0Ensemble& e, std::span<const Pd0RawDataType> extra) {
+  const std::size_t decoded = e.bottom_track ? 3 : 2;
+  const std::size_t types = decoded + extra.size();
+  if (types > kMaxDataTypes) {
+    throw std::invalid_argument("encode_pd0: " + std::to_string(types) +
+                                " data types; the PD0 header's count holds at most 255");
+  }
+  std::vector<std::size_t> offsets(types);
+  std::size_t at = kHeaderFixedBytes + 2 * types;  // the first type follows the offset table
+  const std::size_t sizes[3] = {kFixedLeaderBytes, kVariableLeaderBytes, kBottomTrackBytes};
+  for (std::size_t k = 0; k < decoded; ++k) {
+    offsets[k] = at;
+    at += sizes[k];
+  }
+  for (std::size_t k = 0; k < extra.size(); ++k) {
+    if (extra[k].id == kBottomTrackId && !e.bottom_track) {
+      throw std::invalid_argument("encode_pd0: extra data type " + std::to_string(k) +
+                                  " has the bottom-track ID 0x0600 but the ensemble has no "
+                                  "bottom track; it would be decoded as the bottom track");
+    }
+    offsets[decoded + k] = at;
+    at += 2 + extra[k].body.size();
+  }
+  const std::size_t n = at;
+  if (n > 0xFFFF) {
+    throw std::invalid_argument("encode_pd0: ensemble of " + std::to_string(n) +
+                                " bytes before the checksum; the PD0 byte count holds at most "
+                                "65535");
+  }
   std::vector<uint8_t> out(n + kChecksumBytes, 0);
   uint8_t* p = out.data();
   p[0] = kHeaderId;
   p[1] = kHeaderId;
   put16(p + 2, uint16_t(n));
   p[5] = uint8_t(types);
-  put16(p + 6, uint16_t(fixed_at));
-  put16(p + 8, uint16_t(variable_at));
-  if (e.bottom_track) put16(p + 10, uint16_t(bottom_at));
-  write_fixed(p + fixed_at, e.fixed);
-  write_variable(p + variable_at, e);
-  if (e.bottom_track) write_bottom_track(p + bottom_at, *e.bottom_track);
+  for (std::size_t k = 0; k < types; ++k) {
+    put16(p + kHeaderFixedBytes + 2 * k, uint16_t(offsets[k]));
+  }
+  write_fixed(p + offsets[0], e.fixed);
+  write_variable(p + offsets[1], e);
+  if (e.bottom_track) write_bottom_track(p + offsets[2], *e.bottom_track);
+  for (std::size_t k = 0; k < extra.size(); ++k) {
+    uint8_t* t = p + offsets[decoded + k];
+    put16(t, extra[k].id);
+    std::copy(extra[k].body.begin(), extra[k].body.end(), t + 2);
+  }
   put16(p + n, pd0_checksum({p, n}));
   return out;
 }

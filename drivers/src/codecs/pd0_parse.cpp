@@ -3,8 +3,10 @@
 // Format", "Fixed Leader Data Format", "Variable Leader Data Format", "Bottom-Track Data
 // Format"). Byte positions in comments are the manual's 1-based positions within the type.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include "nav/drivers/codecs/pd0.h"
 #include "pd0_wire.h"
@@ -33,28 +35,40 @@ struct DataType {
   std::size_t size = 0;  ///< bytes up to the next data type (or the checksum)
 };
 
-/// Reads the offset table; every type's extent runs to the next higher offset or to N.
-bool read_types(std::span<const uint8_t> e, std::vector<DataType>& types) {
+/// The offset table of one ensemble, held without allocation (at most 255 entries).
+struct OffsetTable {
+  std::size_t n = 0;                              ///< ensemble byte count (excluding the checksum)
+  std::size_t count = 0;                          ///< number of data types
+  std::array<uint16_t, kMaxDataTypes> offsets{};  ///< in table order
+  std::array<uint16_t, kMaxDataTypes> sorted{};   ///< ascending, for the extents
+};
+
+/// Reads the offset table: every offset inside the table's end .. N - 2, no two equal.
+bool read_offsets(std::span<const uint8_t> e, OffsetTable& table) {
   if (e.size() < kHeaderFixedBytes + kChecksumBytes) return false;
-  const std::size_t n = le16(&e[2]);
-  const std::size_t count = e[5];
-  const std::size_t table_end = kHeaderFixedBytes + 2 * count;
-  if (count == 0 || n + kChecksumBytes != e.size() || table_end + 2 > n) return false;
-  std::vector<std::size_t> offsets(count);
-  for (std::size_t i = 0; i < count; ++i) {
-    offsets[i] = le16(&e[kHeaderFixedBytes + 2 * i]);
-    if (offsets[i] < table_end || offsets[i] + 2 > n) return false;
+  table.n = le16(&e[2]);
+  table.count = e[5];
+  const std::size_t table_end = kHeaderFixedBytes + 2 * table.count;
+  if (table.count == 0 || table.n + kChecksumBytes != e.size() || table_end + 2 > table.n) {
+    return false;
   }
-  std::vector<std::size_t> sorted = offsets;
-  std::sort(sorted.begin(), sorted.end());
-  if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) return false;
-  types.clear();
-  for (std::size_t off : offsets) {
-    const auto next = std::upper_bound(sorted.begin(), sorted.end(), off);
-    const std::size_t end = next == sorted.end() ? n : *next;
-    types.push_back({le16(&e[off]), &e[off], end - off});
+  for (std::size_t i = 0; i < table.count; ++i) {
+    const uint16_t offset = le16(&e[kHeaderFixedBytes + 2 * i]);
+    if (offset < table_end || offset + 2u > table.n) return false;
+    table.offsets[i] = table.sorted[i] = offset;
   }
-  return true;
+  const auto sorted_end = table.sorted.begin() + std::ptrdiff_t(table.count);
+  std::sort(table.sorted.begin(), sorted_end);
+  return std::adjacent_find(table.sorted.begin(), sorted_end) == sorted_end;
+}
+
+/// The k-th data type in table order; its extent runs to the next higher offset or to N.
+DataType type_at(std::span<const uint8_t> e, const OffsetTable& table, std::size_t k) {
+  const std::size_t offset = table.offsets[k];
+  const auto sorted_end = table.sorted.begin() + std::ptrdiff_t(table.count);
+  const auto next = std::upper_bound(table.sorted.begin(), sorted_end, offset);
+  const std::size_t end = next == sorted_end ? table.n : *next;
+  return {le16(&e[offset]), &e[offset], end - offset};
 }
 
 /// Keeps `value` when lo <= value <= hi, else counts a rejected field.
@@ -172,19 +186,19 @@ uint16_t pd0_checksum(std::span<const uint8_t> bytes) {
 Pd0ParseError parse_pd0_ensemble(std::span<const uint8_t> ensemble, Pd0Ensemble& out,
                                  int& out_of_range_fields) {
   out_of_range_fields = 0;
-  std::vector<DataType> types;
-  if (!read_types(ensemble, types)) return Pd0ParseError::kMalformed;
-  const DataType* fixed = nullptr;
-  const DataType* variable = nullptr;
-  const DataType* bottom = nullptr;
+  OffsetTable table;
+  if (!read_offsets(ensemble, table)) return Pd0ParseError::kMalformed;
+  std::optional<DataType> fixed, variable, bottom;
   out = Pd0Ensemble{};
-  for (const DataType& t : types) {
+  if (table.count > 3) out.skipped_type_ids.reserve(table.count);  // one allocation at most
+  for (std::size_t k = 0; k < table.count; ++k) {
+    const DataType t = type_at(ensemble, table, k);
     if (t.id == kFixedLeaderId && !fixed) {
-      fixed = &t;
+      fixed = t;
     } else if (t.id == kVariableLeaderId && !variable) {
-      variable = &t;
+      variable = t;
     } else if (t.id == kBottomTrackId && !bottom) {
-      bottom = &t;
+      bottom = t;
     } else {
       out.skipped_type_ids.push_back(t.id);
     }

@@ -18,6 +18,7 @@ constexpr uint16_t kVariableLeaderId = 0x0080;
 constexpr uint16_t kBottomTrackId = 0x0600;
 constexpr std::size_t kHeaderFixedBytes = 6;  ///< IDs, byte count, spare, number of types
 constexpr std::size_t kChecksumBytes = 2;
+constexpr std::size_t kMaxDataTypes = 255;  ///< the header's count is one byte
 
 // Sizes written by the encoder (WorkHorse firmware 16.x and later).
 constexpr std::size_t kFixedLeaderBytes = 59;

@@ -4,12 +4,13 @@
 // WinRiver II writes. A streaming decoder (bytes in, ensembles out) and an encoder.
 //
 // Ensemble layout (all little-endian): header (0x7F 0x7F, ensemble byte count N excluding the
-// checksum, spare, number of data types, offset table), data types located by the offset
-// table, then a 2-byte checksum = sum of the N bytes mod 65536. Decoded data types:
+// checksum, spare, number of data types (one byte: 1..255), offset table), data types located by
+// the offset table, then a 2-byte checksum = sum of the N bytes mod 65536. Decoded data types:
 // fixed leader 0x0000, variable leader 0x0080, bottom track 0x0600. Profiles (velocity 0x0100,
 // correlation 0x0200, echo intensity 0x0300, percent good 0x0400, status 0x0500) and any
-// other type (WinRiver 0x2000+, Sentinel V, ...) are skipped by the offset table and only
-// listed in `Pd0Ensemble::skipped_type_ids`.
+// other type (WinRiver writes one navigation type 0x2022 per GPS fix, so its ensembles can hold
+// tens of types; Sentinel V, ...) are skipped by the offset table, listed in
+// `Pd0Ensemble::skipped_type_ids` and counted in `Pd0Decoder::skipped_types()`.
 //
 // Conventions: SI units and radians; values absent, flagged invalid by the instrument
 // (-32768 velocity, 0 range) or outside the documented range are empty optionals. Bottom-track
@@ -105,11 +106,15 @@ struct Pd0DecoderOptions {
   /// treated as a false header (counted malformed) and the search goes on. PD0's byte count is
   /// 16 bits, so 65537 accepts everything; smaller values bound the wait on a false header.
   std::size_t max_ensemble_bytes = 65537;
-  /// Largest number of data types in an ensemble (offset table length).
-  std::size_t max_data_types = 32;
 
-  /// True when the options are usable (max_ensemble_bytes >= 64, 3 <= max_data_types <= 255).
+  /// True when the options are usable (max_ensemble_bytes >= 64).
   bool validate() const;
+};
+
+/// Data types of the emitted ensembles that were not decoded (Pd0Ensemble::skipped_type_ids).
+struct Pd0SkippedTypes {
+  uint64_t total = 0;    ///< every skipped data type, repeats of a decoded ID included
+  uint64_t unknown = 0;  ///< of which IDs outside the WorkHorse PD0 table (WinRiver 0x2000+, ...)
 };
 
 /// Streaming PD0 decoder. Feed arbitrary chunks; complete, checksum-valid ensembles are
@@ -117,9 +122,10 @@ struct Pd0DecoderOptions {
 /// drops one byte and searches for the next 0x7F 0x7F. A header is believed (and the decoder
 /// waits for its N bytes) only when its offset table is consistent: first offset right after
 /// the table and pointing at the fixed leader ID 0x0000, offsets increasing and inside N, as
-/// every RDI instrument writes them; this keeps a 0x7F7F in garbage from stalling output. Every
-/// byte fed ends up either in an emitted ensemble, in `stats().dropped_bytes`, or (at most one
-/// incomplete ensemble) in `buffered_bytes()`. stats().out_of_range counts ensembles in which at
+/// every RDI instrument writes them; this keeps a 0x7F7F in garbage from stalling output. Any
+/// number of data types the format can carry (1..255) is accepted. Every byte fed ends up
+/// either in an emitted ensemble, in `stats().dropped_bytes`, or (at most one incomplete
+/// ensemble) in `buffered_bytes()`. stats().out_of_range counts ensembles in which at
 /// least one value was rejected by its range check; such an ensemble is still emitted with those
 /// values empty. An emitted ensemble's host time is the `received` of the feed() call that
 /// completed it. Not thread-safe; one decoder per stream.
@@ -130,6 +136,7 @@ class Pd0Decoder {
   void feed(std::span<const uint8_t> bytes, const HostTime& received,
             std::vector<Pd0Ensemble>& out);
   const DecodeStats& stats() const { return stats_; }
+  const Pd0SkippedTypes& skipped_types() const { return skipped_types_; }
   /// Bytes held waiting for the rest of an ensemble.
   std::size_t buffered_bytes() const { return buffer_.size() - start_; }
 
@@ -143,6 +150,7 @@ class Pd0Decoder {
   std::vector<uint8_t> buffer_;
   std::size_t start_ = 0;  ///< first unconsumed byte of buffer_
   DecodeStats stats_;
+  Pd0SkippedTypes skipped_types_;
 };
 
 /// Outcome of decoding one ensemble.
@@ -155,7 +163,8 @@ enum class Pd0ParseError {
 
 /// Decodes one complete ensemble (header to checksum inclusive; the checksum is not checked
 /// here). Values outside their documented range are left empty and counted in
-/// `out_of_range_fields`. `out` is usable only for kNone and kOutOfRange.
+/// `out_of_range_fields`. `out` is usable only for kNone and kOutOfRange. The offset table is
+/// read on the stack; the only allocation is `out.skipped_type_ids` (at most 253 IDs).
 Pd0ParseError parse_pd0_ensemble(std::span<const uint8_t> ensemble, Pd0Ensemble& out,
                                  int& out_of_range_fields);
 
@@ -166,6 +175,18 @@ Pd0ParseError parse_pd0_ensemble(std::span<const uint8_t> ensemble, Pd0Ensemble&
 /// decode empty again (an empty pressure, which only short leaders produce, is written 0).
 /// sensor_time_us sets both RTC fields (empty -> all zero, which decodes as no time).
 std::vector<uint8_t> encode_pd0(const Pd0Ensemble& ensemble);
+
+/// A data type written verbatim: its 2-byte ID, then `body`.
+struct Pd0RawDataType {
+  uint16_t id = 0;
+  std::vector<uint8_t> body;  ///< the bytes after the ID
+};
+
+/// As encode_pd0(ensemble), with `extra` data types written after the decoded ones, in order
+/// (as WinRiver appends its types). Throws std::invalid_argument when the ensemble would hold
+/// more than 255 data types or more than 65535 bytes before the checksum, or when an extra type
+/// has the bottom-track ID and `ensemble` has no bottom track (it would be decoded as one).
+std::vector<uint8_t> encode_pd0(const Pd0Ensemble& ensemble, std::span<const Pd0RawDataType> extra);
 
 /// Sum of bytes mod 65536 (the PD0 checksum).
 uint16_t pd0_checksum(std::span<const uint8_t> bytes);
