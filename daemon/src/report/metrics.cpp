@@ -1,5 +1,5 @@
 // Report metrics: see metrics.h and daemon/src/report/README.md.
-#include "report/metrics.h"
+#include "nav/report/metrics.h"
 
 #include <Eigen/Cholesky>
 #include <algorithm>
@@ -10,7 +10,7 @@
 #include "nav/core/geometry/pose.h"
 #include "nav/core/geometry/rotation.h"
 #include "nav/core/recovery/consistency.h"
-#include "report/csv_table.h"
+#include "nav/report/csv_table.h"
 
 namespace nav::report {
 namespace {

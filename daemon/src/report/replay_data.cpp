@@ -1,5 +1,5 @@
 // Readers of the dive directory and replay output files (replay_data.h, hil-tests/README.md).
-#include "report/replay_data.h"
+#include "nav/report/replay_data.h"
 
 #include <algorithm>
 #include <array>
@@ -8,7 +8,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "report/csv_table.h"
+#include "nav/report/csv_table.h"
 
 namespace nav::report {
 namespace fs = std::filesystem;

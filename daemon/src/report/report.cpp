@@ -1,12 +1,12 @@
 // run_report: see report.h.
-#include "report/report.h"
+#include "nav/report/report.h"
 
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
 
 #include "nav/core/recovery/consistency.h"
-#include "report/csv_table.h"
+#include "nav/report/csv_table.h"
 
 namespace nav::report {
 namespace fs = std::filesystem;

@@ -26,12 +26,12 @@
 
 #include <Eigen/Core>
 
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/nav_filter.h"
-#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/queue/measurement_queue.h"
 #include "nav/daemon/registration_table.h"
 #include "nav/daemon/sources/dive_log_source.h"
-#include "nav/daemon/time_ordering.h"
+#include "nav/daemon/queue/time_ordering.h"
 
 namespace nav::daemon {
 

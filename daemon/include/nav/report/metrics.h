@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "report/replay_data.h"
+#include "nav/report/replay_data.h"
 
 namespace nav::report {
 

@@ -7,8 +7,8 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
-#include "report/figures.h"
-#include "report/metrics.h"
+#include "nav/report/figures.h"
+#include "nav/report/metrics.h"
 
 namespace nav::report {
 

@@ -16,7 +16,7 @@
 #include "nav/core/recovery/consistency.h"
 #include "nav/core/recovery/exact_marginals.h"
 #include "nav/core/recovery/markov_blanket.h"
-#include "nav/daemon/replay/replay.h"
+#include "nav/daemon/replay/dive_replay.h"
 
 namespace nav::daemon {
 namespace {
