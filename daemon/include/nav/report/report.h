@@ -27,6 +27,6 @@ nlohmann::json run_report(const ReportOptions& options);
 /// The dive directory to use: the option, else summary.json "dive_dir" (absolute, relative to
 /// the working directory, or relative to the replay output directory, first that exists).
 std::optional<std::filesystem::path> resolve_dive_dir(const ReportOptions& options,
-                                                      const nlohmann::json& summary);
+                                                      const daemon::ReplaySummary& summary);
 
 }  // namespace nav::report
