@@ -30,7 +30,7 @@
 #include "nav/core/sim/survey.h"
 #include "nav/daemon/checkpoint.h"
 #include "nav/daemon/checkpoint_worker.h"
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/nav_filter.h"
 #include "nav/daemon/filter/nav_filter_checkpoint.h"
 #include "nav/daemon/resume_point.h"

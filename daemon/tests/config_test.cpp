@@ -1,6 +1,6 @@
 // navd config loader: sim.yaml / rov.yaml load cleanly; unknown keys, wrong types, out-of-range
 // values and missing required keys stop with the key path and the reason.
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 
 #include <gtest/gtest.h>
 

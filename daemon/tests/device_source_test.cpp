@@ -18,7 +18,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
-#include "nav/daemon/dive_log.h"
+#include "nav/daemon/log/dive_log.h"
 #include "nav/daemon/sources/camera_source.h"
 #include "nav/daemon/sources/device_sources.h"
 #include "nav/drivers/codecs/can_signals.h"

@@ -14,7 +14,7 @@
 #include <thread>
 #include <vector>
 
-#include "nav/daemon/dive_log.h"
+#include "nav/daemon/log/dive_log.h"
 #include "nav/drivers/codecs/altimeter.h"
 #include "nav/drivers/codecs/nmea.h"
 #include "nav/drivers/codecs/paroscientific.h"

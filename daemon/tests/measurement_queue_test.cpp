@@ -1,6 +1,6 @@
 // Bounded MPSC measurement queue: FIFO per producer, exact capacity, drops counted per producer,
 // and a multi-threaded run where every measurement is either delivered once or counted as dropped.
-#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/queue/measurement_queue.h"
 
 #include <gtest/gtest.h>
 

@@ -9,9 +9,9 @@
 #include <cstdio>
 #include <map>
 
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/nav_filter.h"
-#include "nav/daemon/registration_inbox.h"
+#include "nav/daemon/queue/registration_inbox.h"
 #include "support/synthetic_dive.h"
 
 namespace nav::daemon {

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "nav/core/serialization/sections.h"
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/nav_filter.h"
 #include "nav/daemon/filter/nav_filter_checkpointer.h"
 #include "nav/daemon/resume_point.h"

@@ -11,7 +11,7 @@
 #include <cstdio>
 #include <numbers>
 
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/nav_filter.h"
 #include "support/synthetic_dive.h"
 

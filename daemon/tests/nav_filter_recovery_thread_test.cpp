@@ -21,7 +21,7 @@
 #include "nav/core/recovery/consistency.h"
 #include "nav/core/recovery/exact_marginals.h"
 #include "nav/core/serialization/sections.h"
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/nav_filter.h"
 #include "nav/daemon/filter/nav_filter_checkpoint.h"
 #include "support/nav_filter_fixture.h"

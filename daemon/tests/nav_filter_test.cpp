@@ -8,7 +8,7 @@
 
 #include "nav/core/recovery/consistency.h"
 #include "nav/core/recovery/exact_marginals.h"
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/chi_square.h"
 #include "nav/daemon/filter/nav_filter.h"
 #include "support/synthetic_dive.h"

@@ -15,7 +15,7 @@
 #include <string>
 
 #include "nav/core/recovery/exact_marginals.h"
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/nav_filter.h"
 #include "navd/link_publisher.h"
 #include "navd/solution_board.h"

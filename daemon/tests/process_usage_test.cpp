@@ -1,6 +1,6 @@
 // ProcessUsage: procfs parsing on fixed text (proc(5) layouts), the CPU % arithmetic, and the
 // real /proc/self readings against what the test itself did (CPU burnt, memory touched).
-#include "nav/daemon/process_usage.h"
+#include "nav/daemon/system/process_usage.h"
 
 #include <gtest/gtest.h>
 

@@ -6,9 +6,9 @@
 #include <filesystem>
 #include <string>
 
-#include "report/csv_table.h"
-#include "report/metrics.h"
-#include "report/replay_data.h"
+#include "nav/report/csv_table.h"
+#include "nav/report/metrics.h"
+#include "nav/report/replay_data.h"
 #include "support/report_fixture.h"
 
 namespace nav::report {

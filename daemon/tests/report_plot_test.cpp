@@ -1,10 +1,10 @@
-// Tests of the report's plot helpers (daemon/src/report/plot.h): 1-2-5 ticks and labels, the
+// Tests of the report's plot helpers (nav/report/plot.h): 1-2-5 ticks and labels, the
 // data-to-pixel map, and that ellipses and rectangles land on the pixels the geometry says.
 #include <gtest/gtest.h>
 
 #include <opencv2/core.hpp>
 
-#include "report/plot.h"
+#include "nav/report/plot.h"
 
 namespace nav::report {
 namespace {

@@ -1,6 +1,6 @@
 // sd_notify wrapper: the exact datagrams arrive on a NOTIFY_SOCKET owned by the test (an AF_UNIX
 // datagram socket in a temp dir); watchdog interval from WATCHDOG_USEC / WATCHDOG_PID.
-#include "nav/daemon/sd_notify.h"
+#include "nav/daemon/system/sd_notify.h"
 
 #include <gtest/gtest.h>
 #include <sys/socket.h>

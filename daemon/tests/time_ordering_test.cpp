@@ -1,6 +1,6 @@
 // Time-of-validity ordering: release after the latency window, order by validity (ties in
 // arrival order), late arrivals and overflow dropped and counted, flush at shutdown.
-#include "nav/daemon/time_ordering.h"
+#include "nav/daemon/queue/time_ordering.h"
 
 #include <gtest/gtest.h>
 

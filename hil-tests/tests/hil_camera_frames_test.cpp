@@ -16,7 +16,7 @@
 
 #include "../../daemon/tests/support/navd_process.h"
 #include "../../daemon/tests/support/net_namespace.h"
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/drivers/transports/gige_camera.h"
 #include "nav/hil/dive_player.h"
 #include "support/sim_dive.h"

@@ -32,7 +32,7 @@
 #include "../../daemon/tests/support/navd_process.h"
 #include "../../daemon/tests/support/net_namespace.h"
 #include "../../daemon/tests/support/udpm_probe.h"
-#include "nav/daemon/host_clock.h"
+#include "nav/daemon/system/host_clock.h"
 #include "nav/hil/dive_player.h"
 #include "support/oracle_vision.h"
 #include "support/sim_dive.h"

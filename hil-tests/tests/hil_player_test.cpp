@@ -21,8 +21,8 @@
 #include <variant>
 #include <vector>
 
-#include "nav/daemon/config.h"
-#include "nav/daemon/dive_log.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/log/dive_log.h"
 #include "nav/drivers/transports/can_bus.h"
 #include "nav/hil/dive_player.h"
 #include "support/sim_dive.h"

@@ -14,7 +14,7 @@
 
 #include "nav/core/models/unary_models.h"
 #include "nav/daemon/filter/innovation_stats.h"
-#include "nav/daemon/replay/replay.h"
+#include "nav/daemon/replay/dive_replay.h"
 #include "support/sim_dive.h"
 
 namespace nav::sim::test {

@@ -17,7 +17,7 @@
 #include <cstdio>
 
 #include "nav/daemon/filter/nav_filter.h"
-#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/queue/measurement_queue.h"
 #include "nav/daemon/sources/dive_log_source.h"
 #include "support/sim_dive.h"
 

@@ -15,7 +15,7 @@
 
 #include "nav/core/geometry/rotation.h"
 #include "nav/daemon/filter/chi_square.h"
-#include "nav/daemon/replay/replay.h"
+#include "nav/daemon/replay/dive_replay.h"
 #include "support/sim_dive.h"
 
 namespace nav::sim::test {

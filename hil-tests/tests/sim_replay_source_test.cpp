@@ -9,7 +9,7 @@
 #include <numbers>
 
 #include "nav/core/geometry/rotation.h"
-#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/queue/measurement_queue.h"
 #include "nav/daemon/sources/dive_log_source.h"
 #include "support/sim_dive.h"
 

@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "nav/daemon/config.h"
-#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/queue/measurement_queue.h"
 #include "nav/daemon/sources/device_sources.h"
 #include "nav/daemon/sources/sensor_health.h"
 #include "navd/publisher.h"

@@ -7,7 +7,7 @@
 #include <navlcm/camera_link_t.hpp>
 #include <navlcm/delayed_state_bound_t.hpp>
 
-#include "nav/daemon/host_clock.h"
+#include "nav/daemon/system/host_clock.h"
 
 namespace nav::navd {
 

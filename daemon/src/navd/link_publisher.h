@@ -15,7 +15,7 @@
 #include <optional>
 #include <vector>
 
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/nav_filter.h"
 #include "navd/solution_board.h"
 

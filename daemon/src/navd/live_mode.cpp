@@ -14,10 +14,10 @@
 
 #include "nav/daemon/filter/nav_filter.h"
 #include "nav/daemon/filter/nav_filter_checkpointer.h"
-#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/queue/measurement_queue.h"
 #include "nav/daemon/resume_point.h"
 #include "nav/daemon/sources/device_sources.h"
-#include "nav/daemon/time_ordering.h"
+#include "nav/daemon/queue/time_ordering.h"
 #include "navd/device_sources.h"
 #include "navd/lcm_url.h"
 #include "navd/link_publisher.h"

@@ -20,8 +20,8 @@
 #include <csignal>
 #include <string>
 
-#include "nav/daemon/config.h"
-#include "nav/daemon/sd_notify.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/system/sd_notify.h"
 
 namespace nav::navd {
 

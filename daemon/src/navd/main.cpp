@@ -20,8 +20,8 @@
 #include <optional>
 #include <string>
 
-#include "nav/daemon/config.h"
-#include "nav/daemon/sd_notify.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/system/sd_notify.h"
 #include "navd/lcm_url.h"
 #include "navd/live_mode.h"
 #include "navd/replay_mode.h"

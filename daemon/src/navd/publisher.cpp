@@ -8,7 +8,7 @@
 #include <navlcm/nav_solution_t.hpp>
 #include <thread>
 
-#include "nav/daemon/host_clock.h"
+#include "nav/daemon/system/host_clock.h"
 
 namespace nav::navd {
 namespace {

@@ -9,9 +9,9 @@
 #include <memory>
 #include <string>
 
-#include "nav/daemon/config.h"
-#include "nav/daemon/measurement_queue.h"
-#include "nav/daemon/process_usage.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/queue/measurement_queue.h"
+#include "nav/daemon/system/process_usage.h"
 #include "nav/daemon/sources/sensor_health.h"
 #include "navd/health_innovations.h"
 #include "navd/solution_board.h"

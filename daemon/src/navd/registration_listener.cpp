@@ -7,7 +7,7 @@
 #include <navlcm/link_proposal_t.hpp>
 #include <navlcm/registration_t.hpp>
 
-#include "nav/daemon/host_clock.h"
+#include "nav/daemon/system/host_clock.h"
 #include "nav/daemon/sources/camera_source.h"
 
 namespace nav::navd {

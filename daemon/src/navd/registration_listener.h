@@ -16,9 +16,9 @@
 #include <string>
 #include <thread>
 
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/nav_filter.h"
-#include "nav/daemon/registration_inbox.h"
+#include "nav/daemon/queue/registration_inbox.h"
 
 namespace lcm {
 class LCM;

@@ -8,14 +8,14 @@
 #include <filesystem>
 #include <thread>
 
-#include "nav/daemon/host_clock.h"
-#include "nav/daemon/measurement_queue.h"
-#include "nav/daemon/replay/replay.h"
+#include "nav/daemon/system/host_clock.h"
+#include "nav/daemon/queue/measurement_queue.h"
+#include "nav/daemon/replay/dive_replay.h"
 #include "navd/lcm_url.h"
 #include "navd/link_publisher.h"
 #include "navd/publisher.h"
 #include "navd/solution_board.h"
-#include "report/report.h"
+#include "nav/report/report.h"
 
 namespace nav::navd {
 namespace {

@@ -1,6 +1,6 @@
 #pragma once
 // navd --replay DIVE.lcmlog: the recorded dive through the same source, time ordering and
-// NavFilter as `navtool replay` (nav/daemon/replay/replay.h), published on LCM as on the vehicle
+// NavFilter as `navtool replay` (replay/dive_replay.h), published on LCM as on the vehicle
 // (Publisher: nav_solution_t, health_t; LinkPublisher: camera_link_t, delayed_state_bound_t,
 // bounds_snapshot_t), with sd_notify READY/WATCHDOG/STOPPING, SIGTERM/SIGINT stop. At the end
 // the replay's JSON summary goes to stdout and, with --out, the replay output directory is
@@ -9,8 +9,8 @@
 #include <csignal>
 #include <string>
 
-#include "nav/daemon/config.h"
-#include "nav/daemon/sd_notify.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/system/sd_notify.h"
 
 namespace nav::navd {
 

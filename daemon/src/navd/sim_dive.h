@@ -11,8 +11,8 @@
 #include <optional>
 #include <string>
 
-#include "nav/daemon/config.h"
-#include "nav/daemon/sd_notify.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/system/sd_notify.h"
 
 namespace nav::navd {
 

@@ -25,8 +25,8 @@
 #include "nav/core/recovery/exact_marginals.h"
 #include "nav/core/recovery/state_recovery.h"
 #include "navtool/commands.h"
-#include "report/csv_table.h"
-#include "report/figures.h"
+#include "nav/report/csv_table.h"
+#include "nav/report/figures.h"
 
 namespace nav::tool {
 namespace {

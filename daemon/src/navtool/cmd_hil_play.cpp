@@ -14,7 +14,7 @@
 #include <string>
 #include <thread>
 
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/hil/dive_player.h"
 #include "navtool/commands.h"
 

@@ -1,6 +1,6 @@
 // navtool replay DIVE_DIR_OR_LOG [--config C] [--speed X | --as-fast-as-possible] [--out DIR]
 // [--json]: plays a recorded dive (hil-tests/README.md) through the same decoders, time ordering
-// and NavFilter as navd (nav/daemon/replay/replay.h), with a dead-reckoning twin, and prints a
+// and NavFilter as navd (replay/dive_replay.h), with a dead-reckoning twin, and prints a
 // JSON summary; --out writes the replay output directory (summary.json, trajectory.csv,
 // dead_reckoning.csv, states.csv, links.csv, proposals.csv, information_blocks.csv,
 // logdet.csv). Recovery: the configured fixed PCG iterations at each image, synchronously or
@@ -12,9 +12,9 @@
 #include <memory>
 #include <string>
 
-#include "nav/daemon/config.h"
-#include "nav/daemon/dive_log.h"
-#include "nav/daemon/replay/replay.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/log/dive_log.h"
+#include "nav/daemon/replay/dive_replay.h"
 #include "navtool/commands.h"
 
 namespace nav::tool {

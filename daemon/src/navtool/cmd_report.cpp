@@ -6,8 +6,8 @@
 #include <memory>
 
 #include "navtool/commands.h"
-#include "report/csv_table.h"
-#include "report/report.h"
+#include "nav/report/csv_table.h"
+#include "nav/report/report.h"
 
 namespace nav::tool {
 namespace {

@@ -15,8 +15,8 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
-#include "nav/daemon/config.h"
-#include "nav/daemon/host_clock.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/system/host_clock.h"
 #include "nav/daemon/sources/device_sources.h"
 #include "navtool/commands.h"
 

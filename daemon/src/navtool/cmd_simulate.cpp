@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/sim/simulate.h"
 #include "navtool/commands.h"
 

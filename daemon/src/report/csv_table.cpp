@@ -1,5 +1,5 @@
 // CsvTable: see csv_table.h.
-#include "report/csv_table.h"
+#include "nav/report/csv_table.h"
 
 #include <charconv>
 #include <cmath>

@@ -1,5 +1,5 @@
 // Report figures: see figures.h.
-#include "report/figures.h"
+#include "nav/report/figures.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <map>
 #include <set>
 
-#include "report/csv_table.h"
+#include "nav/report/csv_table.h"
 
 namespace nav::report {
 namespace {

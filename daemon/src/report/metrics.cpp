@@ -1,5 +1,5 @@
 // Report metrics: see metrics.h and daemon/src/report/README.md.
-#include "report/metrics.h"
+#include "nav/report/metrics.h"
 
 #include <Eigen/Cholesky>
 #include <algorithm>
@@ -10,7 +10,8 @@
 #include "nav/core/geometry/pose.h"
 #include "nav/core/geometry/rotation.h"
 #include "nav/core/recovery/consistency.h"
-#include "report/csv_table.h"
+#include "nav/daemon/replay/output_schema.h"
+#include "nav/report/csv_table.h"
 
 namespace nav::report {
 namespace {
@@ -22,6 +23,11 @@ json or_null(const std::optional<double>& v) { return v ? json(*v) : json(nullpt
 std::optional<double> json_number(const json& j, const char* key) {
   if (j.is_object() && j.contains(key) && j[key].is_number()) return j[key].get<double>();
   return std::nullopt;
+}
+
+/// A summary number, or nothing when summary.json did not give it (ReplaySummary::kUnset).
+std::optional<double> set_or_none(double v) {
+  return std::isnan(v) ? std::nullopt : std::optional<double>(v);
 }
 
 /// Duration of the dive, s: sim.json duration_s, else the span of truth.csv.
@@ -145,18 +151,9 @@ LinkCounts count_links(const std::vector<ProposedLink>& links) {
   LinkCounts c;
   std::set<std::pair<long long, long long>> pairs;
   for (const ProposedLink& l : links) {
-    ++c.proposed;
-    const bool accepted = l.outcome == "accepted";
-    if (accepted) {
-      ++c.accepted;
+    c.add(l.outcome, l.is_outlier);  // outcomes were checked by read_links
+    if (l.outcome == daemon::output_schema::LinksCsv::kOutcomes[0]) {  // accepted
       pairs.emplace(std::min(l.state_i, l.state_j), std::max(l.state_i, l.state_j));
-    }
-    if (l.outcome == "gated") ++c.gated;
-    if (l.outcome == "registration_failed") ++c.registration_failed;
-    if (l.outcome == "not_registered") ++c.not_registered;
-    if (l.is_outlier) {
-      ++c.outliers_proposed;
-      ++(accepted ? c.outliers_accepted : c.outliers_rejected);
     }
   }
   c.camera_links = pairs.size();
@@ -237,8 +234,8 @@ json compute_metrics(const ReplayOutput& replay, const DiveData* dive,
       cons.checked ? json(cons.worst_min_eigenvalue) : json(nullptr);
   m["conservative_tolerance"] = options.conservative_tolerance;
 
-  const std::optional<double> wall_s = json_number(replay.summary, "wall_s");
-  std::optional<double> rtf = json_number(replay.summary, "realtime_factor");
+  const std::optional<double> wall_s = set_or_none(replay.summary.wall_s);
+  std::optional<double> rtf = set_or_none(replay.summary.realtime_factor);
   if (!rtf && wall_s && *wall_s > 0.0) {
     if (auto d = dive_duration_s(dive)) rtf = *d / *wall_s;
   }

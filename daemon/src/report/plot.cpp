@@ -1,5 +1,5 @@
 // Plot: see plot.h.
-#include "report/plot.h"
+#include "nav/report/plot.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "report/csv_table.h"
+#include "nav/report/csv_table.h"
 
 namespace nav::report {
 namespace {

@@ -1,5 +1,7 @@
 // Readers of the dive directory and replay output files (replay_data.h, hil-tests/README.md).
-#include "report/replay_data.h"
+// The replay output files are read by the column names of their schemas (output_schema.h), the
+// same the writer derives its header rows from.
+#include "nav/report/replay_data.h"
 
 #include <algorithm>
 #include <array>
@@ -8,19 +10,31 @@
 #include <fstream>
 #include <sstream>
 
-#include "report/csv_table.h"
+#include "nav/daemon/replay/output_schema.h"
+#include "nav/report/csv_table.h"
 
 namespace nav::report {
 namespace fs = std::filesystem;
+namespace schema = daemon::output_schema;
+using schema::InformationBlocksCsv;
+using schema::LinksCsv;
+using schema::LogdetCsv;
+using schema::StatesCsv;
+using schema::TrajectoryCsv;
 namespace {
 
-constexpr std::array<const char*, 6> kPoseColumns = {"x_m",      "y_m",       "z_m",
-                                                     "roll_rad", "pitch_rad", "heading_rad"};
-
+/// Columns x_m .. heading_rad. The dive directory's truth.csv and images.csv name them as the
+/// replay output files do.
 std::array<size_t, 6> pose_columns(const CsvTable& t) {
+  const schema::CsvSchema& names = TrajectoryCsv::slam();
   std::array<size_t, 6> cols{};
-  for (size_t k = 0; k < 6; ++k) cols[k] = t.column(kPoseColumns[k]);
+  for (size_t k = 0; k < 6; ++k) cols[k] = t.column(names.name(TrajectoryCsv::kPose + k));
   return cols;
+}
+
+/// Index in `t` of column `index` of `csv` ("missing column" error when absent).
+size_t column(const CsvTable& t, const schema::CsvSchema& csv, size_t index) {
+  return t.column(csv.name(index));
 }
 
 core::Vec6 pose_at(const CsvTable& t, size_t row, const std::array<size_t, 6>& cols) {
@@ -29,14 +43,15 @@ core::Vec6 pose_at(const CsvTable& t, size_t row, const std::array<size_t, 6>& c
   return p;
 }
 
-/// Columns <prefix>00..<prefix>55 (row-major 6x6), or nothing when the first is absent.
-std::optional<std::array<size_t, 36>> matrix_columns(const CsvTable& t, char prefix) {
-  if (!t.find_column(std::string(1, prefix) + "00")) return std::nullopt;
+/// The 36 columns of the states.csv matrix starting at `first` (StatesCsv::kBound, kExact,
+/// kInitialBound; row-major 6x6), or nothing when its first cell's column is absent.
+std::optional<std::array<size_t, 36>> matrix_columns(const CsvTable& t, size_t first) {
+  const schema::CsvSchema& csv = StatesCsv::schema();
+  if (!t.find_column(csv.name(first))) return std::nullopt;
   std::array<size_t, 36> cols{};
   for (int r = 0; r < 6; ++r) {
     for (int c = 0; c < 6; ++c) {
-      cols[static_cast<size_t>(6 * r + c)] =
-          t.column(std::string(1, prefix) + std::to_string(r) + std::to_string(c));
+      cols[static_cast<size_t>(6 * r + c)] = column(t, csv, StatesCsv::cell(first, r, c));
     }
   }
   return cols;
@@ -65,7 +80,7 @@ bool parse_integer(const std::string& s, long long& value) {
 
 std::vector<TimedPose> read_timed_poses(const fs::path& file) {
   const CsvTable t = CsvTable::read(file);
-  const size_t t_col = t.column("t_us");
+  const size_t t_col = column(t, TrajectoryCsv::slam(), TrajectoryCsv::kTimeUs);
   const auto cols = pose_columns(t);
   std::vector<TimedPose> out(t.rows());
   for (size_t r = 0; r < t.rows(); ++r) {
@@ -91,14 +106,16 @@ std::vector<TrueImage> read_images(const fs::path& file) {
 
 std::vector<DelayedState> read_states(const fs::path& file) {
   const CsvTable t = CsvTable::read(file);
-  const size_t id_col = t.column("state_id"), frame_col = t.column("frame_id"),
-               t_col = t.column("t_us");
+  const schema::CsvSchema& csv = StatesCsv::schema();
+  const size_t id_col = column(t, csv, StatesCsv::kStateId),
+               frame_col = column(t, csv, StatesCsv::kFrameId),
+               t_col = column(t, csv, StatesCsv::kTimeUs);
   const auto cols = pose_columns(t);
-  const auto b_cols = matrix_columns(t, 'b');
-  const auto e_cols = matrix_columns(t, 'e');
-  if (!b_cols) t.column("b00");  // throws "missing column"
-  if (!e_cols) t.column("e00");
-  const auto i_cols = matrix_columns(t, 'i');  // optional: initial bound (Fig. 5)
+  const auto b_cols = matrix_columns(t, StatesCsv::kBound);
+  const auto e_cols = matrix_columns(t, StatesCsv::kExact);
+  if (!b_cols) column(t, csv, StatesCsv::kBound);  // throws "missing column"
+  if (!e_cols) column(t, csv, StatesCsv::kExact);
+  const auto i_cols = matrix_columns(t, StatesCsv::kInitialBound);  // optional (Fig. 5)
   std::vector<DelayedState> out(t.rows());
   for (size_t r = 0; r < t.rows(); ++r) {
     DelayedState& s = out[r];
@@ -117,11 +134,13 @@ std::vector<DelayedState> read_states(const fs::path& file) {
 
 std::vector<ProposedLink> read_links(const fs::path& file) {
   const CsvTable t = CsvTable::read(file);
-  const size_t t_col = t.column("t_us"), fi = t.column("frame_i"), fj = t.column("frame_j"),
-               si = t.column("state_i"), sj = t.column("state_j"), oc = t.column("outcome"),
-               m2 = t.column("mahalanobis_sq"), ol = t.column("is_outlier");
-  static const std::array<std::string, 4> kOutcomes = {"accepted", "gated", "registration_failed",
-                                                       "not_registered"};
+  const schema::CsvSchema& csv = LinksCsv::schema();
+  const size_t t_col = column(t, csv, LinksCsv::kTimeUs), fi = column(t, csv, LinksCsv::kFrameI),
+               fj = column(t, csv, LinksCsv::kFrameJ), si = column(t, csv, LinksCsv::kStateI),
+               sj = column(t, csv, LinksCsv::kStateJ), oc = column(t, csv, LinksCsv::kOutcome),
+               m2 = column(t, csv, LinksCsv::kMahalanobisSq),
+               ol = column(t, csv, LinksCsv::kIsOutlier);
+  const auto& kOutcomes = LinksCsv::kOutcomes;
   std::vector<ProposedLink> out(t.rows());
   for (size_t r = 0; r < t.rows(); ++r) {
     ProposedLink& l = out[r];
@@ -131,7 +150,7 @@ std::vector<ProposedLink> read_links(const fs::path& file) {
     l.state_i = t.integer(r, si);
     l.state_j = t.integer(r, sj);
     l.outcome = t.text(r, oc);
-    if (std::find(kOutcomes.begin(), kOutcomes.end(), l.outcome) == kOutcomes.end()) {
+    if (std::find(std::begin(kOutcomes), std::end(kOutcomes), l.outcome) == std::end(kOutcomes)) {
       throw ReportError(t.where(r) + ": column 'outcome': '" + l.outcome +
                         "' is not one of accepted, gated, registration_failed, not_registered");
     }
@@ -157,15 +176,15 @@ BlockPattern read_block_pattern(const fs::path& file) {
     if (line[0] == '#') {
       std::istringstream c(line.substr(1));
       std::string k1, k2;
-      if (!have_dims && c >> k1 >> p.block_dim >> k2 >> p.num_blocks && k1 == "block_dim" &&
-          k2 == "num_blocks") {
+      if (!have_dims && c >> k1 >> p.block_dim >> k2 >> p.num_blocks &&
+          k1 == InformationBlocksCsv::kBlockDimKey && k2 == InformationBlocksCsv::kNumBlocksKey) {
         have_dims = true;
       } else if (!have_dims) {
         throw ReportError(where() + ": expected '# block_dim D num_blocks N', got '" + line + "'");
       }
       continue;
     }
-    if (line == "i,j") continue;  // optional header row
+    if (line == InformationBlocksCsv::schema().header()) continue;  // optional header row
     const size_t comma = line.find(',');
     long long i = 0, j = 0;
     if (comma == std::string::npos || !parse_integer(line.substr(0, comma), i) ||
@@ -190,13 +209,27 @@ BlockPattern read_block_pattern(const fs::path& file) {
 
 std::vector<LogdetRow> read_logdet(const fs::path& file) {
   const CsvTable t = CsvTable::read(file);
-  const size_t si = t.column("state_i"), sj = t.column("state_j"), ours = t.column("ours"),
-               mb = t.column("markov_blanket");
+  const schema::CsvSchema& csv = LogdetCsv::schema();
+  const size_t si = column(t, csv, LogdetCsv::kStateI), sj = column(t, csv, LogdetCsv::kStateJ),
+               ours = column(t, csv, LogdetCsv::kOurs),
+               mb = column(t, csv, LogdetCsv::kMarkovBlanket);
   std::vector<LogdetRow> out(t.rows());
   for (size_t r = 0; r < t.rows(); ++r) {
     out[r] = {t.integer(r, si), t.integer(r, sj), t.number(r, ours), t.number(r, mb)};
   }
   return out;
+}
+
+daemon::ReplaySummary read_summary(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw ReportError(file.string() + ": cannot open");
+  std::stringstream text;
+  text << in.rdbuf();
+  try {
+    return daemon::ReplaySummary::from_json(text.str(), file.string());
+  } catch (const std::invalid_argument& e) {
+    throw ReportError(e.what());
+  }
 }
 
 nlohmann::json read_json(const fs::path& file) {
@@ -213,19 +246,23 @@ ReplayOutput read_replay_output(const fs::path& dir) {
   if (!fs::is_directory(dir)) throw ReportError(dir.string() + ": not a directory");
   ReplayOutput out;
   out.dir = dir;
-  out.summary =
-      fs::exists(dir / "summary.json") ? read_json(dir / "summary.json") : nlohmann::json::object();
-  out.trajectory = read_timed_poses(dir / "trajectory.csv");
-  out.dead_reckoning = read_timed_poses(dir / "dead_reckoning.csv");
-  out.states = read_states(dir / "states.csv");
-  out.links = read_links(dir / "links.csv");
-  if (fs::exists(dir / "proposals.csv")) {
-    out.proposal_rows = static_cast<long long>(CsvTable::read(dir / "proposals.csv").rows());
+  if (const fs::path summary = dir / schema::kSummaryFile; fs::exists(summary)) {
+    out.summary = read_summary(summary);
   }
-  if (fs::exists(dir / "information_blocks.csv")) {
-    out.blocks = read_block_pattern(dir / "information_blocks.csv");
+  out.trajectory = read_timed_poses(dir / TrajectoryCsv::slam().file());
+  out.dead_reckoning = read_timed_poses(dir / TrajectoryCsv::dead_reckoning().file());
+  out.states = read_states(dir / StatesCsv::schema().file());
+  out.links = read_links(dir / LinksCsv::schema().file());
+  if (const fs::path proposals = dir / schema::ProposalsCsv::schema().file();
+      fs::exists(proposals)) {
+    out.proposal_rows = static_cast<long long>(CsvTable::read(proposals).rows());
   }
-  if (fs::exists(dir / "logdet.csv")) out.logdet = read_logdet(dir / "logdet.csv");
+  if (const fs::path blocks = dir / InformationBlocksCsv::schema().file(); fs::exists(blocks)) {
+    out.blocks = read_block_pattern(blocks);
+  }
+  if (const fs::path logdet = dir / LogdetCsv::schema().file(); fs::exists(logdet)) {
+    out.logdet = read_logdet(logdet);
+  }
   return out;
 }
 

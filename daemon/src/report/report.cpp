@@ -1,12 +1,13 @@
 // run_report: see report.h.
-#include "report/report.h"
+#include "nav/report/report.h"
 
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
 
 #include "nav/core/recovery/consistency.h"
-#include "report/csv_table.h"
+#include "nav/daemon/replay/output_schema.h"
+#include "nav/report/csv_table.h"
 
 namespace nav::report {
 namespace fs = std::filesystem;
@@ -56,16 +57,15 @@ void write_text(const fs::path& path, const std::string& text) {
 
 }  // namespace
 
-std::optional<fs::path> resolve_dive_dir(const ReportOptions& options, const json& summary) {
+std::optional<fs::path> resolve_dive_dir(const ReportOptions& options,
+                                         const daemon::ReplaySummary& summary) {
   if (options.dive_dir) return options.dive_dir;
-  if (!summary.is_object() || !summary.contains("dive_dir") || !summary["dive_dir"].is_string()) {
-    return std::nullopt;
-  }
-  const fs::path recorded = summary["dive_dir"].get<std::string>();
+  if (!summary.dive_dir) return std::nullopt;
+  const fs::path recorded = *summary.dive_dir;
   if (recorded.is_absolute() || fs::is_directory(recorded)) return recorded;
   if (fs::is_directory(options.out_dir / recorded)) return options.out_dir / recorded;
-  throw ReportError((options.out_dir / "summary.json").string() + ": dive_dir '" +
-                    recorded.string() + "' not found (give --dive)");
+  throw ReportError((options.out_dir / daemon::output_schema::kSummaryFile).string() +
+                    ": dive_dir '" + recorded.string() + "' not found (give --dive)");
 }
 
 json run_report(const ReportOptions& options) {

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "nav/core/serialization/sections.h"
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/nav_filter.h"
 #include "nav/daemon/filter/nav_filter_checkpoint.h"
 #include "synthetic_dive.h"

@@ -18,7 +18,7 @@
 
 #include "nav/core/geometry/pose.h"
 #include "nav/core/geometry/rotation.h"
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/sensor_models.h"
 #include "nav/daemon/measurement.h"
 #include "nav/daemon/registration_table.h"

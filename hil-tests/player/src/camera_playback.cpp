@@ -10,7 +10,7 @@
 #include <variant>
 
 #include "host_clock.h"
-#include "nav/daemon/dive_log.h"
+#include "nav/daemon/log/dive_log.h"
 
 namespace nav::hil {
 namespace {

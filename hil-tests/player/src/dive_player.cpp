@@ -19,8 +19,8 @@
 #include "can_output.h"
 #include "fake_gige_camera.h"
 #include "host_clock.h"
-#include "nav/daemon/config.h"
-#include "nav/daemon/dive_log.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/log/dive_log.h"
 #include "nav/hil/pty_link.h"
 #include "navd_config_yaml.h"
 

@@ -1,13 +1,13 @@
 #pragma once
-// The player schedules on the host clocks (nav/daemon/host_clock.h: CLOCK_MONOTONIC, what navd
-// stamps its reads with; CLOCK_REALTIME for LCM utimes) with an interruptible sleep.
+// The player schedules on the host clocks (nav/daemon/system/host_clock.h: CLOCK_MONOTONIC, what
+// navd stamps its reads with; CLOCK_REALTIME for LCM utimes) with an interruptible sleep.
 #include <time.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
 
-#include "nav/daemon/host_clock.h"
+#include "nav/daemon/system/host_clock.h"
 
 namespace nav::hil {
 

@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <tuple>
 
-#include "nav/daemon/dive_log.h"
+#include "nav/daemon/log/dive_log.h"
 
 namespace nav::sim {
 

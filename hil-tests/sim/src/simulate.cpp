@@ -13,7 +13,7 @@
 #include "dive_files.h"
 #include "nav/core/geometry/pose.h"
 #include "nav/core/geometry/rotation.h"
-#include "nav/daemon/dive_log.h"
+#include "nav/daemon/log/dive_log.h"
 #include "nav/sim/geometry2d.h"
 #include "nav/sim/renderer.h"
 

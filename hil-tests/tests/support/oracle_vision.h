@@ -23,9 +23,9 @@
 #include <vector>
 
 #include "nav/core/geometry/pose.h"
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/sensor_models.h"
-#include "nav/daemon/host_clock.h"
+#include "nav/daemon/system/host_clock.h"
 #include "sim_dive.h"
 
 namespace nav::hil::test {

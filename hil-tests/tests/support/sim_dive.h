@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "nav/core/geometry/types.h"
-#include "nav/daemon/config.h"
-#include "nav/daemon/dive_log.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/log/dive_log.h"
 #include "nav/sim/simulate.h"
 
 namespace nav::sim::test {

@@ -124,7 +124,7 @@
 #include "nav/core/recovery/bounds.h"
 #include "nav/core/recovery/state_recovery.h"
 #include "nav/core/status.h"
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/innovation_stats.h"
 #include "nav/daemon/filter/recovery_worker.h"
 #include "nav/daemon/filter/sensor_models.h"

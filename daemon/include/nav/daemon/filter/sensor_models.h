@@ -23,7 +23,7 @@
 #include "nav/core/models/binary_models.h"
 #include "nav/core/models/measurement.h"
 #include "nav/core/models/unary_models.h"
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/measurement.h"
 
 namespace nav::daemon {

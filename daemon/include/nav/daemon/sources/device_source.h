@@ -28,7 +28,7 @@
 #include <span>
 #include <string>
 
-#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/queue/measurement_queue.h"
 #include "nav/daemon/sources/sensor_decoder.h"
 #include "nav/daemon/sources/sensor_health.h"
 #include "nav/drivers/transports/byte_stream.h"

@@ -15,8 +15,8 @@
 #include <thread>
 #include <vector>
 
-#include "nav/daemon/config.h"
-#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/queue/measurement_queue.h"
 #include "nav/daemon/sources/device_source.h"
 #include "nav/daemon/sources/sensor_health.h"
 

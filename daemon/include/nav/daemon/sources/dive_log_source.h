@@ -23,8 +23,8 @@
 #include <string>
 #include <vector>
 
-#include "nav/daemon/config.h"
-#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/queue/measurement_queue.h"
 #include "nav/daemon/registration_table.h"
 #include "nav/daemon/sources/sensor_decoder.h"
 

@@ -42,7 +42,7 @@
 #include <string>
 #include <vector>
 
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/measurement.h"
 #include "nav/drivers/transports/can_bus.h"
 

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/sources/sensor_decoder.h"
 
 namespace nav::daemon {

@@ -16,7 +16,7 @@
 
 #include "nav/core/geometry/types.h"
 #include "nav/core/models/binary_models.h"
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/sim/geometry2d.h"
 
 namespace nav::sim {

@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "nav/core/geometry/types.h"
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/sim/seafloor.h"
 
 namespace nav::sim {

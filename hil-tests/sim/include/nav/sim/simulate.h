@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/sim/mission.h"
 #include "nav/sim/oracle.h"
 #include "nav/sim/renderer.h"

@@ -1,5 +1,5 @@
-// systemd notification wrapper: see nav/daemon/sd_notify.h.
-#include "nav/daemon/sd_notify.h"
+// systemd notification wrapper: see nav/daemon/system/sd_notify.h.
+#include "nav/daemon/system/sd_notify.h"
 
 #include <systemd/sd-daemon.h>
 

@@ -7,8 +7,8 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
-#include "report/figures.h"
-#include "report/metrics.h"
+#include "nav/report/figures.h"
+#include "nav/report/metrics.h"
 
 namespace nav::report {
 
@@ -27,6 +27,6 @@ nlohmann::json run_report(const ReportOptions& options);
 /// The dive directory to use: the option, else summary.json "dive_dir" (absolute, relative to
 /// the working directory, or relative to the replay output directory, first that exists).
 std::optional<std::filesystem::path> resolve_dive_dir(const ReportOptions& options,
-                                                      const nlohmann::json& summary);
+                                                      const daemon::ReplaySummary& summary);
 
 }  // namespace nav::report

@@ -1,5 +1,5 @@
 // Bounded MPSC measurement queue on moodycamel::ConcurrentQueue: see measurement_queue.h.
-#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/queue/measurement_queue.h"
 
 #include <concurrentqueue.h>
 

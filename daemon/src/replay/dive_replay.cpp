@@ -1,5 +1,5 @@
 // run_replay: dive-log source thread -> queue -> time ordering -> NavFilter (+ dead reckoning).
-#include "nav/daemon/replay/replay.h"
+#include "nav/daemon/replay/dive_replay.h"
 
 #include <spdlog/spdlog.h>
 
@@ -9,7 +9,7 @@
 #include <thread>
 
 #include "nav/daemon/filter/nav_filter_checkpointer.h"
-#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/queue/measurement_queue.h"
 #include "nav/daemon/replay/filter_worker.h"
 #include "nav/daemon/resume_point.h"
 

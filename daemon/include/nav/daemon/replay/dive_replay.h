@@ -26,12 +26,12 @@
 
 #include <Eigen/Core>
 
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/nav_filter.h"
-#include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/queue/measurement_queue.h"
 #include "nav/daemon/registration_table.h"
 #include "nav/daemon/sources/dive_log_source.h"
-#include "nav/daemon/time_ordering.h"
+#include "nav/daemon/queue/time_ordering.h"
 
 namespace nav::daemon {
 
@@ -103,12 +103,14 @@ struct ReplayAnalysis {
 /// current; the filter is otherwise unchanged).
 ReplayAnalysis analyse(NavFilter& slam);
 
-/// The JSON summary (one line); keys listed in README.md ("navtool replay").
+/// The JSON summary (one line): make_replay_summary(...).to_json() (replay_summary.h; keys listed
+/// in README.md "navtool replay").
 std::string replay_summary_json(const ReplayRun& run, const ReplayAnalysis& analysis,
                                 const std::string& dive_dir, const std::string& config_path);
 
-/// Writes every file of hil-tests/README.md "Replay output directory" into `dir` (created).
-/// Throws std::runtime_error naming the file that cannot be written.
+/// Writes every file of hil-tests/README.md "Replay output directory" into `dir` (created), with
+/// the writers of output_files.h. Throws std::runtime_error naming the file that cannot be
+/// written.
 void write_replay_outputs(const ReplayRun& run, const ReplayAnalysis& analysis,
                           const std::string& summary_json, const std::string& dir);
 

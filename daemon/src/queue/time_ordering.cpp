@@ -1,5 +1,5 @@
 // Time-of-validity ordering within a latency window: see time_ordering.h.
-#include "nav/daemon/time_ordering.h"
+#include "nav/daemon/queue/time_ordering.h"
 
 #include <algorithm>
 #include <stdexcept>

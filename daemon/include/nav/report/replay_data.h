@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "nav/core/geometry/types.h"
+#include "nav/daemon/replay/replay_summary.h"
 
 namespace nav::report {
 
@@ -65,7 +66,7 @@ struct BlockPattern {
 /// The replay output directory. Files marked optional are empty/absent-tolerant.
 struct ReplayOutput {
   std::filesystem::path dir;
-  nlohmann::json summary;                 ///< summary.json ({} when absent)
+  daemon::ReplaySummary summary;          ///< summary.json (defaults when absent)
   std::vector<TimedPose> trajectory;      ///< trajectory.csv
   std::vector<TimedPose> dead_reckoning;  ///< dead_reckoning.csv
   std::vector<DelayedState> states;       ///< states.csv
@@ -96,6 +97,7 @@ std::vector<DelayedState> read_states(const std::filesystem::path& file);
 std::vector<ProposedLink> read_links(const std::filesystem::path& file);
 BlockPattern read_block_pattern(const std::filesystem::path& file);
 std::vector<LogdetRow> read_logdet(const std::filesystem::path& file);
+daemon::ReplaySummary read_summary(const std::filesystem::path& file);
 nlohmann::json read_json(const std::filesystem::path& file);
 
 }  // namespace nav::report

@@ -9,7 +9,7 @@
 #include <thread>
 #include <vector>
 
-#include "nav/daemon/dive_log.h"
+#include "nav/daemon/log/dive_log.h"
 
 namespace nav::daemon {
 namespace {

@@ -1,4 +1,4 @@
-#include "nav/daemon/dive_log.h"
+#include "nav/daemon/log/dive_log.h"
 
 #include <lcm/lcm-cpp.hpp>
 

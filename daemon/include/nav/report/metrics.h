@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "report/replay_data.h"
+#include "nav/report/replay_data.h"
 
 namespace nav::report {
 
@@ -72,17 +72,10 @@ struct ConservativeResult {
 };
 ConservativeResult conservative_bounds(const std::vector<DelayedState>& states, double tol);
 
-/// Counts over links.csv.
-struct LinkCounts {
-  size_t proposed = 0;             ///< rows
-  size_t accepted = 0;             ///< outcome == accepted
-  size_t gated = 0;                ///< outcome == gated
-  size_t registration_failed = 0;  ///< outcome == registration_failed
-  size_t not_registered = 0;       ///< outcome == not_registered
-  size_t camera_links = 0;         ///< distinct accepted (state_i, state_j) pairs
-  size_t outliers_proposed = 0;    ///< is_outlier
-  size_t outliers_rejected = 0;    ///< is_outlier && outcome != accepted
-  size_t outliers_accepted = 0;    ///< is_outlier && outcome == accepted
+/// Counts over links.csv: the outcome counts of the replay summary (one counting rule,
+/// daemon::LinkOutcomeCounts::add) and the distinct accepted pairs.
+struct LinkCounts : daemon::LinkOutcomeCounts {
+  size_t camera_links = 0;  ///< distinct accepted (state_i, state_j) pairs
 };
 LinkCounts count_links(const std::vector<ProposedLink>& links);
 

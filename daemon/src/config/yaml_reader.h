@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 
 namespace nav::daemon::detail {
 

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "nav/daemon/config.h"
+#include "nav/daemon/config/config.h"
 #include "yaml_reader.h"
 
 namespace nav::daemon::detail {

@@ -1,5 +1,5 @@
 // Process CPU and memory from procfs (process_usage.h, proc(5)).
-#include "nav/daemon/process_usage.h"
+#include "nav/daemon/system/process_usage.h"
 
 #include <unistd.h>
 
@@ -8,7 +8,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "nav/daemon/host_clock.h"
+#include "nav/daemon/system/host_clock.h"
 
 namespace nav::daemon {
 namespace {

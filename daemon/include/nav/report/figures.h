@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "report/plot.h"
-#include "report/replay_data.h"
+#include "nav/report/plot.h"
+#include "nav/report/replay_data.h"
 
 namespace nav::report {
 

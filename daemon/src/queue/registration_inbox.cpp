@@ -1,5 +1,5 @@
 // Bounded SPSC hand-over of registrations to the filter thread: see registration_inbox.h.
-#include "nav/daemon/registration_inbox.h"
+#include "nav/daemon/queue/registration_inbox.h"
 
 #include <readerwriterqueue.h>
 #include <spdlog/spdlog.h>

@@ -19,22 +19,10 @@
 #include <vector>
 
 #include "nav/core/models/constant_velocity.h"
+#include "nav/daemon/config/config_error.h"
 #include "nav/drivers/config/can_config.h"
 
 namespace nav::daemon {
-
-/// A configuration error: `key_path()` is the YAML path ("sensors[2].transport.baud", "" for the
-/// document root), `reason()` what is wrong; what() = "<source>: <key_path>: <reason>".
-class ConfigError : public std::runtime_error {
- public:
-  ConfigError(const std::string& source, std::string key_path, std::string reason);
-  const std::string& key_path() const { return key_path_; }
-  const std::string& reason() const { return reason_; }
-
- private:
-  std::string key_path_;
-  std::string reason_;
-};
 
 enum class SensorType {
   kDvlPd0,        ///< "dvl_pd0": Teledyne RDI PD0 binary ensembles

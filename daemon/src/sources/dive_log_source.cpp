@@ -11,8 +11,8 @@
 #include <stdexcept>
 #include <thread>
 
-#include "nav/daemon/dive_log.h"
-#include "nav/daemon/host_clock.h"
+#include "nav/daemon/log/dive_log.h"
+#include "nav/daemon/system/host_clock.h"
 
 namespace nav::daemon {
 namespace {
