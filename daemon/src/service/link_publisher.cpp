@@ -1,4 +1,4 @@
-#include "navd/link_publisher.h"
+#include "nav/daemon/service/link_publisher.h"
 
 #include <Eigen/Cholesky>
 #include <cstdio>
@@ -9,7 +9,7 @@
 
 #include "nav/daemon/host_clock.h"
 
-namespace nav::navd {
+namespace nav::daemon::service {
 
 LinkPublisher::LinkPublisher(const daemon::LcmConfig& config, SolutionBoard& board)
     : config_(config), board_(board), lcm_(std::make_unique<lcm::LCM>(config.url)) {}
@@ -155,4 +155,4 @@ void LinkPublisher::update_board(const daemon::NavFilter& filter) {
   });
 }
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

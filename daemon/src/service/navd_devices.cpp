@@ -1,11 +1,11 @@
-// navd's device-thread glue (navd/device_sources.h).
-#include "navd/device_sources.h"
+// navd's device-thread glue (nav/daemon/service/navd_devices.h).
+#include "nav/daemon/service/navd_devices.h"
 
 #include <spdlog/spdlog.h>
 
 #include <lcm/lcm-cpp.hpp>
 
-namespace nav::navd {
+namespace nav::daemon::service {
 
 NavdDevices::NavdDevices(const daemon::NavdConfig& config, daemon::MeasurementQueue& queue)
     : health_(config), lcm_(std::make_unique<lcm::LCM>(config.lcm.url)) {
@@ -19,4 +19,4 @@ NavdDevices::NavdDevices(const daemon::NavdConfig& config, daemon::MeasurementQu
 
 NavdDevices::~NavdDevices() { join(); }
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

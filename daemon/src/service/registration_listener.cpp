@@ -1,4 +1,4 @@
-#include "navd/registration_listener.h"
+#include "nav/daemon/service/registration_listener.h"
 
 #include <spdlog/spdlog.h>
 
@@ -10,7 +10,7 @@
 #include "nav/daemon/host_clock.h"
 #include "nav/daemon/sources/camera_source.h"
 
-namespace nav::navd {
+namespace nav::daemon::service {
 RegistrationListener::RegistrationListener(const daemon::LcmConfig& config,
                                            daemon::RegistrationInbox& inbox)
     : lcm_(std::make_unique<lcm::LCM>(config.url)), inbox_(inbox) {
@@ -97,4 +97,4 @@ std::string registration_summary_json(const daemon::RegistrationInbox& inbox,
   return text;
 }
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

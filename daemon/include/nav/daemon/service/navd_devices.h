@@ -1,11 +1,11 @@
 #pragma once
 // navd's glue for the device threads (nav/daemon/sources/device_sources.h): the per-sensor
 // health board, the LCM instance the raw bytes and NAV_IMAGE go out on, and the DeviceSources,
-// bundled so navd's main wires them with a few lines:
+// bundled so the live mode (live_mode.h) wires them with a few lines:
 //
-//   navd::NavdDevices devices(config, queue);         // after the queue, before the threads
-//   devices.attach(publisher);                         // health_t.sensors from the board
-//   if (!replaying) devices.start(stop);               // one thread per non-sim sensor
+//   NavdDevices devices(config, queue);   // after the queue, before the threads
+//   devices.attach(publisher);            // health_t.sensors from the board
+//   if (!replaying) devices.start(stop);  // one thread per non-sim sensor
 //   ... stop.store(true); devices.join();
 //
 // Not in replay: a dive's config names the vehicle's devices, which must not be opened then.
@@ -18,15 +18,15 @@
 
 #include "nav/daemon/config.h"
 #include "nav/daemon/measurement_queue.h"
+#include "nav/daemon/service/publisher.h"
 #include "nav/daemon/sources/device_sources.h"
 #include "nav/daemon/sources/sensor_health.h"
-#include "navd/publisher.h"
 
 namespace lcm {
 class LCM;
 }
 
-namespace nav::navd {
+namespace nav::daemon::service {
 
 class NavdDevices {
  public:
@@ -53,4 +53,4 @@ class NavdDevices {
   std::unique_ptr<daemon::DeviceSources> sources_;
 };
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

@@ -1,14 +1,14 @@
 #pragma once
-// Which LCM URL navd publishes on. The default mode (config/sim.yaml) publishes on udpm with
-// ttl=0 so that tools on the same machine (lcm-logger --lcm-url=..., lcm-spy) see the traffic;
-// a host without a multicast route (no network, a container) cannot open udpm. Then the
-// default mode falls back to in-process memq:// with a warning that names the fix, so that the
+// Which LCM URL the service publishes on. `navtool survey` (config/sim.yaml) publishes on udpm
+// with ttl=0 so that tools on the same machine (lcm-logger --lcm-url=..., lcm-spy) see the
+// traffic; a host without a multicast route (no network, a container) cannot open udpm. Then
+// the survey falls back to in-process memq:// with a warning that names the fix, so that the
 // simulated dive, its outputs and the report still come out; a URL given with --lcm-url is an
-// explicit request and its failure stops navd (exit 2) with the same fix.
+// explicit request and its failure stops the survey (exit 2) with the same fix.
 
 #include <string>
 
-namespace nav::navd {
+namespace nav::daemon::service {
 
 /// "cannot open LCM at 'URL'" and, for udpm, the likely cause and the fix (the replay and live
 /// modes log it and run without publishing).
@@ -21,4 +21,4 @@ bool lcm_url_opens(const std::string& url);
 /// and without it throws std::invalid_argument with the reason and the fix.
 std::string usable_lcm_url(const std::string& url, bool fallback_to_memq);
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

@@ -1,4 +1,4 @@
-#include "navd/publisher.h"
+#include "nav/daemon/service/publisher.h"
 
 #include <spdlog/spdlog.h>
 
@@ -10,7 +10,7 @@
 
 #include "nav/daemon/host_clock.h"
 
-namespace nav::navd {
+namespace nav::daemon::service {
 namespace {
 
 std::int64_t period_us(double rate_hz) { return static_cast<std::int64_t>(1e6 / rate_hz); }
@@ -95,4 +95,4 @@ void Publisher::publish_health(const SolutionView& view) {
   }
 }
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

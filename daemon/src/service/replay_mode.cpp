@@ -1,4 +1,4 @@
-#include "navd/replay_mode.h"
+#include "nav/daemon/service/replay_mode.h"
 
 #include <spdlog/spdlog.h>
 
@@ -11,13 +11,12 @@
 #include "nav/daemon/host_clock.h"
 #include "nav/daemon/measurement_queue.h"
 #include "nav/daemon/replay/replay.h"
-#include "navd/lcm_url.h"
-#include "navd/link_publisher.h"
-#include "navd/publisher.h"
-#include "navd/solution_board.h"
-#include "report/report.h"
+#include "nav/daemon/service/lcm_url.h"
+#include "nav/daemon/service/link_publisher.h"
+#include "nav/daemon/service/publisher.h"
+#include "nav/daemon/service/solution_board.h"
 
-namespace nav::navd {
+namespace nav::daemon::service {
 namespace {
 
 constexpr std::size_t kQueueCapacity = 4096;
@@ -30,24 +29,6 @@ int wait_for(const sigset_t& signals, const std::atomic<bool>& done) {
     if (sig > 0) return sig;
   }
   return 0;
-}
-
-/// The report of the replay output directory `out_dir` of the dive `dive_dir`; false (logged)
-/// on failure.
-bool write_report(const std::string& out_dir, const std::string& dive_dir) {
-  report::ReportOptions options;
-  options.out_dir = out_dir;
-  options.dive_dir = dive_dir;
-  try {
-    const auto start = std::chrono::steady_clock::now();
-    (void)report::run_report(options);
-    spdlog::info("navd: report written to {} ({:.1f} s)", out_dir,
-                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    return true;
-  } catch (const std::exception& e) {
-    spdlog::error("navd: report of {}: {}", out_dir, e.what());
-    return false;
-  }
 }
 
 }  // namespace
@@ -107,8 +88,7 @@ int run_replay_mode(const daemon::NavdConfig& config, const ReplayModeArgs& args
   if (!args.out_dir.empty()) daemon::write_replay_outputs(run, analysis, summary, args.out_dir);
   std::printf("%s\n", summary.c_str());
   std::fflush(stdout);
-  if (!run.error.empty()) return 1;
-  return args.report && !args.out_dir.empty() && !write_report(args.out_dir, dive_dir) ? 1 : 0;
+  return run.error.empty() ? 0 : 1;
 }
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

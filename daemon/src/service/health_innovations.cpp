@@ -1,6 +1,6 @@
-#include "navd/health_innovations.h"
+#include "nav/daemon/service/health_innovations.h"
 
-namespace nav::navd {
+namespace nav::daemon::service {
 namespace {
 
 navlcm::sensor_health_t& entry_named(std::vector<navlcm::sensor_health_t>& sensors,
@@ -58,4 +58,4 @@ void HealthInnovations::fill(std::vector<navlcm::sensor_health_t>& sensors,
   previous_ = now;
 }
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

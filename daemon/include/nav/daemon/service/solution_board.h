@@ -11,7 +11,7 @@
 #include "nav/core/geometry/types.h"
 #include "nav/daemon/filter/innovation_stats.h"
 
-namespace nav::navd {
+namespace nav::daemon::service {
 
 /// The published view of the estimate.
 struct SolutionView {
@@ -47,4 +47,4 @@ class SolutionBoard {
   SolutionView view_;
 };
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

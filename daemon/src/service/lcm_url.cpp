@@ -1,11 +1,11 @@
-#include "navd/lcm_url.h"
+#include "nav/daemon/service/lcm_url.h"
 
 #include <spdlog/spdlog.h>
 
 #include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
-namespace nav::navd {
+namespace nav::daemon::service {
 namespace {
 
 constexpr const char* kMemq = "memq://";
@@ -31,8 +31,8 @@ bool lcm_url_opens(const std::string& url) {
 std::string usable_lcm_url(const std::string& url, bool fallback_to_memq) {
   if (lcm_url_opens(url)) return url;
   if (!fallback_to_memq) throw std::invalid_argument(lcm_open_error(url));
-  spdlog::warn("navd: {}; publishing in-process only ({}) instead", lcm_open_error(url), kMemq);
+  spdlog::warn("{}; publishing in-process only ({}) instead", lcm_open_error(url), kMemq);
   return kMemq;
 }
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

@@ -12,15 +12,15 @@
 #include "nav/daemon/config.h"
 #include "nav/daemon/measurement_queue.h"
 #include "nav/daemon/process_usage.h"
+#include "nav/daemon/service/health_innovations.h"
+#include "nav/daemon/service/solution_board.h"
 #include "nav/daemon/sources/sensor_health.h"
-#include "navd/health_innovations.h"
-#include "navd/solution_board.h"
 
 namespace lcm {
 class LCM;
 }
 
-namespace nav::navd {
+namespace nav::daemon::service {
 
 struct PublisherCounters {
   std::uint64_t solutions = 0;
@@ -55,4 +55,4 @@ class Publisher {
   PublisherCounters counters_;
 };
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

@@ -1,6 +1,6 @@
 #pragma once
 // navd on the vehicle: the device threads of the sensors with a hardware transport
-// (navd/device_sources.h) feed the same MeasurementQueue -> TimeOrderingBuffer
+// (nav/daemon/service/navd_devices.h) feed the same MeasurementQueue -> TimeOrderingBuffer
 // (filter.latency_window_ms) -> NavFilter -> Publisher / LinkPublisher path as navd --replay,
 // paced by the devices themselves. Camera links come from an asynchronous vision stage
 // (registration_listener.h: registration_t on lcm.channels.registration into the filter
@@ -23,7 +23,7 @@
 #include "nav/daemon/config.h"
 #include "nav/daemon/sd_notify.h"
 
-namespace nav::navd {
+namespace nav::daemon::service {
 
 struct LiveModeArgs {
   std::string config_path;
@@ -37,4 +37,4 @@ bool has_device_sensors(const daemon::NavdConfig& config);
 int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
                   const sigset_t& stop_signals, const daemon::SdNotifier& notifier);
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

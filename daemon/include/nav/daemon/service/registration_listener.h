@@ -25,7 +25,7 @@ class LCM;
 class ReceiveBuffer;
 }  // namespace lcm
 
-namespace nav::navd {
+namespace nav::daemon::service {
 
 class RegistrationListener {
  public:
@@ -69,4 +69,4 @@ class LinkProposalPublisher {
 std::string registration_summary_json(const daemon::RegistrationInbox& inbox,
                                       const daemon::NavFilter& filter);
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

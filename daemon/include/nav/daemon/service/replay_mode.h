@@ -4,7 +4,9 @@
 // (Publisher: nav_solution_t, health_t; LinkPublisher: camera_link_t, delayed_state_bound_t,
 // bounds_snapshot_t), with sd_notify READY/WATCHDOG/STOPPING, SIGTERM/SIGINT stop. At the end
 // the replay's JSON summary goes to stdout and, with --out, the replay output directory is
-// written, and with `report` the report (metrics.json, the paper's figures) after it. Exit status: 0 done or stopped, 1 the filter failed.
+// written. Used by navd --replay and by `navtool survey` (which writes its report afterwards:
+// the report is not part of the vehicle binary). Exit status: 0 done or stopped, 1 the filter
+// failed.
 
 #include <csignal>
 #include <string>
@@ -12,7 +14,7 @@
 #include "nav/daemon/config.h"
 #include "nav/daemon/sd_notify.h"
 
-namespace nav::navd {
+namespace nav::daemon::service {
 
 struct ReplayModeArgs {
   std::string log_path;
@@ -20,12 +22,11 @@ struct ReplayModeArgs {
   double speed = 1.0;
   bool as_fast_as_possible = false;
   std::string out_dir;
-  bool checkpoints = false;  ///< --checkpoints: resume from / write checkpoint.path
-  bool report = false;       ///< with out_dir: also run the report (report/report.h) there
+  bool checkpoints = false;         ///< --checkpoints: resume from / write checkpoint.path
   std::string checkpoint_identity;  ///< "": the log path (ReplayOptions::checkpoint_identity)
 };
 
 int run_replay_mode(const daemon::NavdConfig& config, const ReplayModeArgs& args,
                     const sigset_t& stop_signals, const daemon::SdNotifier& notifier);
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

@@ -9,13 +9,13 @@
 
 #include "nav/daemon/filter/innovation_stats.h"
 
-namespace nav::navd {
+namespace nav::daemon::service {
 
 class HealthInnovations {
  public:
   /// Fills the entry of `sensors` with the same name for each record of `now` (appending an
   /// entry, other fields zero and last_message_age_s -1, for a sensor the device threads do not
-  /// report, e.g. in replay and the default mode), then keeps `now` as the previous snapshot.
+  /// report, e.g. in a replay or the survey), then keeps `now` as the previous snapshot.
   void fill(std::vector<navlcm::sensor_health_t>& sensors,
             const std::vector<daemon::SensorInnovation>& now);
 
@@ -23,4 +23,4 @@ class HealthInnovations {
   std::vector<daemon::SensorInnovation> previous_;
 };
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

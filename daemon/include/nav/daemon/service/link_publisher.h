@@ -17,13 +17,13 @@
 
 #include "nav/daemon/config.h"
 #include "nav/daemon/filter/nav_filter.h"
-#include "navd/solution_board.h"
+#include "nav/daemon/service/solution_board.h"
 
 namespace lcm {
 class LCM;
 }
 
-namespace nav::navd {
+namespace nav::daemon::service {
 
 /// The robot's marginal covariance while the map holds only the robot (before the first
 /// delayed state): Λ_rr⁻¹ (12 x 12 Cholesky, ~2 µs); nullopt once delayed states exist (their
@@ -58,4 +58,4 @@ class LinkPublisher {
   LinkPublisherCounters counters_;
 };
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

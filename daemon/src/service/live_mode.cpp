@@ -1,4 +1,4 @@
-#include "navd/live_mode.h"
+#include "nav/daemon/service/live_mode.h"
 
 #include <spdlog/spdlog.h>
 
@@ -16,16 +16,16 @@
 #include "nav/daemon/filter/nav_filter_checkpointer.h"
 #include "nav/daemon/measurement_queue.h"
 #include "nav/daemon/resume_point.h"
+#include "nav/daemon/service/lcm_url.h"
+#include "nav/daemon/service/link_publisher.h"
+#include "nav/daemon/service/navd_devices.h"
+#include "nav/daemon/service/publisher.h"
+#include "nav/daemon/service/registration_listener.h"
+#include "nav/daemon/service/solution_board.h"
 #include "nav/daemon/sources/device_sources.h"
 #include "nav/daemon/time_ordering.h"
-#include "navd/device_sources.h"
-#include "navd/lcm_url.h"
-#include "navd/link_publisher.h"
-#include "navd/solution_board.h"
-#include "navd/publisher.h"
-#include "navd/registration_listener.h"
 
-namespace nav::navd {
+namespace nav::daemon::service {
 namespace {
 
 constexpr std::size_t kQueueCapacity = 4096;
@@ -212,4 +212,4 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
   return code;
 }
 
-}  // namespace nav::navd
+}  // namespace nav::daemon::service
