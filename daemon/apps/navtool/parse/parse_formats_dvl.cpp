@@ -10,7 +10,7 @@
 
 #include "nav/drivers/codecs/pd0.h"
 #include "nav/drivers/codecs/pd6.h"
-#include "navtool/parse_formats.h"
+#include "navtool/parse/parse_formats.h"
 
 namespace nav::tool {
 namespace {

@@ -30,7 +30,7 @@
 #include "nav/drivers/config/can_config.h"
 #include "nav/drivers/time/clock_mapping.h"
 #include "navtool/commands.h"
-#include "navtool/parse_formats.h"
+#include "navtool/parse/parse_formats.h"
 
 namespace nav::tool {
 namespace {

@@ -1,4 +1,5 @@
-// navtool: offline companion of navd (simulate, replay, covariance, parse, register, report).
+// navtool: offline companion of navd (survey, simulate, replay, report, covariance, parse,
+// sensors, hil-play, demo).
 // Each subcommand registers itself from its own cmd_<name>.cpp; see commands.h.
 #include <cstdio>
 
@@ -21,7 +22,9 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const nav::tool::CommandError& e) {
     std::fprintf(stderr, "navtool: %s\n", e.what());
-    return 1;
+    return e.exit_status;
+  } catch (const nav::tool::CommandExit& e) {
+    return e.exit_status;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "navtool: unexpected error: %s\n", e.what());
     return 2;

@@ -1,4 +1,4 @@
-#include "navd/sim_dive.h"
+#include "navtool/survey/sim_dive.h"
 
 #include <spdlog/spdlog.h>
 
@@ -12,7 +12,7 @@
 
 #include "nav/sim/simulate.h"
 
-namespace nav::navd {
+namespace nav::tool {
 namespace {
 
 namespace fs = std::filesystem;
@@ -31,8 +31,9 @@ std::string cache_mismatch(const daemon::SimDiveConfig& sim, const fs::path& dir
   const nlohmann::json& o = j["options"];
   if (o.value("seed", -1LL) != sim.seed || o.value("images", -1LL) != sim.images ||
       o.value("outlier_rate", -1.0) != sim.outlier_rate) {
-    return (dir / "sim.json").string() + ": simulated with seed " + o.value("seed", nlohmann::json()).dump() +
-           ", images " + o.value("images", nlohmann::json()).dump() + ", outlier_rate " +
+    return (dir / "sim.json").string() + ": simulated with seed " +
+           o.value("seed", nlohmann::json()).dump() + ", images " +
+           o.value("images", nlohmann::json()).dump() + ", outlier_rate " +
            o.value("outlier_rate", nlohmann::json()).dump() + ", not the config's";
   }
   return {};
@@ -53,7 +54,7 @@ bool simulate(const daemon::SimDiveConfig& sim, const std::string& config_path,
     if (stop.load()) throw SimulationStopped{};
     if (const int tenth = static_cast<int>(fraction * 10.0); tenth > last_tenth) {
       last_tenth = tenth;
-      spdlog::info("navd: simulating {}: {} %", sim.dive_dir, 10 * tenth);
+      spdlog::info("navtool survey: simulating {}: {} %", sim.dive_dir, 10 * tenth);
     }
   };
   std::exception_ptr failure;
@@ -61,8 +62,8 @@ bool simulate(const daemon::SimDiveConfig& sim, const std::string& config_path,
   std::thread worker([&] {
     try {
       const sim::SimSummary s = sim::simulate_dive(options, config_path);
-      spdlog::info("navd: simulated {}: {} images, {:.0f} s dive, {} log events", sim.dive_dir,
-                   s.images, s.duration_s, s.log_events);
+      spdlog::info("navtool survey: simulated {}: {} images, {:.0f} s dive, {} log events",
+                   sim.dive_dir, s.images, s.duration_s, s.log_events);
     } catch (const SimulationStopped&) {
       stopped = true;
     } catch (...) {
@@ -75,7 +76,7 @@ bool simulate(const daemon::SimDiveConfig& sim, const std::string& config_path,
   auto last_watchdog = std::chrono::steady_clock::now();
   while (!done.load()) {
     if (const int sig = sigtimedwait(&stop_signals, nullptr, &tick); sig > 0) {
-      spdlog::info("navd: signal {}, stopping the simulation", sig);
+      spdlog::info("navtool survey: signal {}, stopping the simulation", sig);
       stop.store(true);
     }
     if (period && std::chrono::steady_clock::now() - last_watchdog >= *period) {
@@ -104,15 +105,15 @@ std::optional<std::string> ensure_sim_dive(const daemon::SimDiveConfig& sim,
   const std::string log_path = (dir / "dive.lcmlog").string();
   const std::string mismatch = cache_mismatch(sim, dir);
   if (mismatch.empty()) {
-    spdlog::info("navd: reusing the simulated dive {}", sim.dive_dir);
+    spdlog::info("navtool survey: reusing the simulated dive {}", sim.dive_dir);
     return log_path;
   }
-  spdlog::info("navd: simulating the dive {} (seed {}, {} images): {}", sim.dive_dir, sim.seed,
-               sim.images, mismatch);
+  spdlog::info("navtool survey: simulating the dive {} (seed {}, {} images): {}", sim.dive_dir,
+               sim.seed, sim.images, mismatch);
   notifier.status("simulating " + sim.dive_dir);
   fs::remove(dir / "sim.json");  // a dive interrupted from here on is never reused
   if (!simulate(sim, config_path, stop_signals, notifier)) return std::nullopt;
   return log_path;
 }
 
-}  // namespace nav::navd
+}  // namespace nav::tool

@@ -15,7 +15,7 @@
 #include "nav/drivers/codecs/kvh.h"
 #include "nav/drivers/codecs/nmea.h"
 #include "nav/drivers/codecs/paroscientific.h"
-#include "navtool/parse_formats.h"
+#include "navtool/parse/parse_formats.h"
 
 namespace nav::tool {
 namespace {

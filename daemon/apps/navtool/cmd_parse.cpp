@@ -8,7 +8,7 @@
 #include <string>
 
 #include "navtool/commands.h"
-#include "navtool/parse_formats.h"
+#include "navtool/parse/parse_formats.h"
 
 namespace nav::tool {
 

@@ -13,9 +13,18 @@
 
 namespace nav::tool {
 
-/// Thrown by a subcommand to end navtool with a message on stderr and exit status 1.
+/// Thrown by a subcommand to end navtool with a message on stderr and `exit_status` (1: the
+/// command failed; 2: bad options or configuration, where a subcommand distinguishes them).
 struct CommandError : std::runtime_error {
-  using std::runtime_error::runtime_error;
+  explicit CommandError(const std::string& what, int status = 1)
+      : std::runtime_error(what), exit_status(status) {}
+  int exit_status;
+};
+
+/// Thrown by a subcommand that ends early with this exit status after reporting on its own
+/// (`navtool survey`: 1 when the replay failed, its summary already printed).
+struct CommandExit {
+  int exit_status;
 };
 
 /// Adds one subcommand (and its callback) to the application.
