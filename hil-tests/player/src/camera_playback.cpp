@@ -9,7 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <variant>
 
-#include "host_clock.h"
+#include "interruptible_sleep.h"
 #include "nav/daemon/dive_log.h"
 
 namespace nav::hil {

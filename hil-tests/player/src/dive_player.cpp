@@ -18,7 +18,7 @@
 #include "camera_playback.h"
 #include "can_output.h"
 #include "fake_gige_camera.h"
-#include "host_clock.h"
+#include "interruptible_sleep.h"
 #include "nav/daemon/config.h"
 #include "nav/daemon/dive_log.h"
 #include "nav/hil/pty_link.h"

@@ -1,6 +1,7 @@
 #pragma once
-// The player schedules on the host clocks (nav/daemon/host_clock.h: CLOCK_MONOTONIC, what navd
-// stamps its reads with; CLOCK_REALTIME for LCM utimes) with an interruptible sleep.
+// The player's interruptible sleep on the daemon's host clock (nav/daemon/host_clock.h:
+// CLOCK_MONOTONIC, what navd stamps its reads with). The clocks themselves are the daemon's; this
+// file holds only the sleep, until the daemon library offers one.
 #include <time.h>
 
 #include <algorithm>
