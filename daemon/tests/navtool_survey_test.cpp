@@ -1,7 +1,8 @@
-// End-to-end tests of navd's default mode (NAVD_PATH, sim_dive.h): config/sim.yaml with its
-// `sim` dive in a private directory and few images. The first run simulates the dive and
-// replays it as fast as possible with --out (replay outputs, then the report); the second reuses
-// the dive and gives the same outputs. Also: the systemd notifications (READY, WATCHDOG,
+// End-to-end tests of `navtool survey` (NAVTOOL_PATH; apps/navtool/cmd_survey.cpp):
+// config/sim.yaml with its `sim` dive in a private directory and few images. The first run
+// simulates the dive and replays it through navd's replay mode as fast as possible with --out
+// (replay outputs, then the report, whose directory the last stderr line names); the second
+// reuses the dive and gives the same outputs. Also: the systemd notifications (READY, WATCHDOG,
 // STATUS, STOPPING) on a test-owned NOTIFY_SOCKET, a clean SIGTERM shutdown within 1 s with exit
 // status 0, and nav_solution_t / health_t over LCM udpm with ttl=0 in the test's own network
 // namespace (support/net_namespace.h; skipped with the reason where namespaces are not
@@ -39,7 +40,7 @@ using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
 constexpr const char* kUdpmUrl = nav::tool::test::kIsolatedUdpmUrl;
-// navd and this test in a network namespace of their own (before any thread starts).
+// navtool and this test in a network namespace of their own (before any thread starts).
 const nav::tool::test::NetNamespace& kNet = nav::tool::test::isolated_network();
 
 std::string slurp(const std::filesystem::path& path) {
@@ -49,15 +50,16 @@ std::string slurp(const std::filesystem::path& path) {
   return ss.str();
 }
 
-/// A navd child process with stdout/stderr redirected to files in a private directory.
-class NavdProcess {
+/// A `navtool survey` child process with stdout/stderr redirected to files in a private
+/// directory.
+class SurveyProcess {
  public:
   using Env = std::vector<std::pair<std::string, std::string>>;
-  /// `no_network`: navd runs in a network namespace of its own without any route.
-  explicit NavdProcess(const std::vector<std::string>& args, const Env& env = {},
-                       bool no_network = false) {
+  /// `no_network`: navtool runs in a network namespace of its own without any route.
+  explicit SurveyProcess(const std::vector<std::string>& args, const Env& env = {},
+                         bool no_network = false) {
     dir_ = std::filesystem::temp_directory_path() /
-           ("navd_sim_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++));
+           ("navtool_survey_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++));
     std::filesystem::create_directories(dir_);
     pid_ = ::fork();
     if (pid_ == 0) {
@@ -66,7 +68,7 @@ class NavdProcess {
       exec_child(args);
     }
   }
-  ~NavdProcess() {
+  ~SurveyProcess() {
     if (pid_ > 0 && !reaped_) {
       ::kill(pid_, SIGKILL);
       ::waitpid(pid_, nullptr, 0);
@@ -93,8 +95,9 @@ class NavdProcess {
  private:
   [[noreturn]] void exec_child(const std::vector<std::string>& args) {
     std::vector<char*> argv;
-    std::string path = NAVD_PATH;
+    std::string path = NAVTOOL_PATH, command = "survey";
     argv.push_back(path.data());
+    argv.push_back(command.data());
     std::vector<std::string> copy = args;
     for (std::string& a : copy) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -116,7 +119,8 @@ class SimDir {
  public:
   explicit SimDir(int images) {
     dir_ = std::filesystem::temp_directory_path() /
-           ("navd_sim_test_dir_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++));
+           ("navtool_survey_test_dir_" + std::to_string(::getpid()) + "_" +
+            std::to_string(counter_++));
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
     std::string yaml = slurp("config/sim.yaml");
@@ -147,11 +151,11 @@ class SimDir {
   std::filesystem::path dir_;
 };
 
-TEST(NavdSim, DefaultModeSimulatesReplaysReportsThenReusesTheDive) {
+TEST(NavtoolSurvey, DefaultModeSimulatesReplaysReportsThenReusesTheDive) {
   constexpr int kImages = 12;
   const SimDir sim(kImages);
-  NavdProcess first({"--config", sim.config().string(), "--as-fast-as-possible", "--out",
-                     sim.out("out1").string()});
+  SurveyProcess first({"--config", sim.config().string(), "--as-fast-as-possible", "--out",
+                       sim.out("out1").string()});
   ASSERT_EQ(first.wait_exit(std::chrono::seconds(60)), 0) << first.err();
   EXPECT_NE(first.err().find("simulating the dive"), std::string::npos) << first.err();
   EXPECT_NE(first.err().find("100 %"), std::string::npos) << first.err();  // progress
@@ -165,15 +169,23 @@ TEST(NavdSim, DefaultModeSimulatesReplaysReportsThenReusesTheDive) {
   EXPECT_EQ(j["update_failures"].get<int>(), 0);
   EXPECT_EQ(j["decode_errors"].get<int>(), 0);
   EXPECT_DOUBLE_EQ(j["conservative_fraction"].get<double>(), 1.0);
-  for (const char* f : {"summary.json", "states.csv", "trajectory.csv", "links.csv",
-                        "metrics.json", "fig1_trajectory.png"}) {
+  for (const char* f : {"summary.json", "states.csv", "trajectory.csv", "links.csv", "metrics.json",
+                        "fig1_trajectory.png"}) {
     EXPECT_TRUE(std::filesystem::exists(sim.out("out1") / f)) << f;
   }
   const json metrics = json::parse(slurp(sim.out("out1") / "metrics.json"));
   EXPECT_EQ(metrics["delayed_states"].get<int>(), kImages);
+  // The output ends by naming the report's directory and files.
+  std::string err = first.err();
+  while (!err.empty() && err.back() == '\n') err.pop_back();
+  const std::string last_line = err.substr(err.rfind('\n') + 1);
+  EXPECT_NE(last_line.find("report"), std::string::npos) << last_line;
+  EXPECT_NE(last_line.find(sim.out("out1").string() + ": metrics.json, fig1_trajectory.png"),
+            std::string::npos)
+      << last_line;
 
-  NavdProcess second({"--config", sim.config().string(), "--as-fast-as-possible", "--out",
-                      sim.out("out2").string()});
+  SurveyProcess second({"--config", sim.config().string(), "--as-fast-as-possible", "--out",
+                        sim.out("out2").string()});
   ASSERT_EQ(second.wait_exit(std::chrono::seconds(60)), 0) << second.err();
   EXPECT_NE(second.err().find("reusing the simulated dive"), std::string::npos) << second.err();
   EXPECT_EQ(second.err().find("simulating"), std::string::npos) << second.err();
@@ -182,24 +194,27 @@ TEST(NavdSim, DefaultModeSimulatesReplaysReportsThenReusesTheDive) {
   }
 }
 
-TEST(NavdSim, ImagesOptionOtherThanTheCachedDiveSimulatesAgain) {
+TEST(NavtoolSurvey, ImagesOptionOtherThanTheCachedDiveSimulatesAgain) {
   const SimDir sim(6);
-  NavdProcess first({"--config", sim.config().string(), "--as-fast-as-possible"});
+  SurveyProcess first({"--config", sim.config().string(), "--as-fast-as-possible"});
   ASSERT_EQ(first.wait_exit(std::chrono::seconds(60)), 0) << first.err();
-  NavdProcess second({"--config", sim.config().string(), "--images", "8", "--as-fast-as-possible"});
+  SurveyProcess second(
+      {"--config", sim.config().string(), "--images", "8", "--as-fast-as-possible"});
   ASSERT_EQ(second.wait_exit(std::chrono::seconds(60)), 0) << second.err();
   EXPECT_NE(second.err().find("not the config's"), std::string::npos) << second.err();
   EXPECT_EQ(json::parse(second.out())["images"].get<int>(), 8);
 }
 
-TEST(NavdSim, ConfigWithoutSimSectionOrDevicesIsAnError) {
+TEST(NavtoolSurvey, ConfigWithoutSimSectionIsAConfigurationError) {
   const SimDir sim(6);
   std::string yaml = slurp(sim.config());
   yaml = yaml.substr(0, yaml.find("\nsim:") + 1);
   std::ofstream(sim.out("nosim.yaml")) << yaml;
-  NavdProcess navd({"--config", sim.out("nosim.yaml").string()});
-  EXPECT_EQ(navd.wait_exit(std::chrono::seconds(20)), 2);
-  EXPECT_NE(navd.err().find("nothing to run"), std::string::npos) << navd.err();
+  SurveyProcess survey({"--config", sim.out("nosim.yaml").string()});
+  EXPECT_EQ(survey.wait_exit(std::chrono::seconds(20)), 2);
+  EXPECT_NE(survey.err().find("nosim.yaml: sim: no `sim` section"), std::string::npos)
+      << survey.err();
+  EXPECT_TRUE(survey.out().empty()) << survey.out();
 }
 
 /// A datagram socket bound to a fresh path, as systemd's NOTIFY_SOCKET.
@@ -207,7 +222,7 @@ class NotifySocket {
  public:
   NotifySocket() {
     path_ = (std::filesystem::temp_directory_path() /
-             ("navd_sim_test_notify_" + std::to_string(::getpid())))
+             ("navtool_survey_test_notify_" + std::to_string(::getpid())))
                 .string();
     std::filesystem::remove(path_);
     fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
@@ -237,21 +252,21 @@ class NotifySocket {
   bool bound_ = false;
 };
 
-TEST(NavdSim, NotifiesSystemdReadyWatchdogStatusStopping) {
+TEST(NavtoolSurvey, NotifiesSystemdReadyWatchdogStatusStopping) {
   NotifySocket socket;
   ASSERT_TRUE(socket.bound()) << "cannot bind " << socket.path();
   const SimDir sim(12);  // ~100 s of dive: ~1 s at 100x
-  NavdProcess navd({"--config", sim.config().string(), "--speed", "100"},
-                   {{"NOTIFY_SOCKET", socket.path()}, {"WATCHDOG_USEC", "200000"}});
+  SurveyProcess survey({"--config", sim.config().string(), "--speed", "100"},
+                       {{"NOTIFY_SOCKET", socket.path()}, {"WATCHDOG_USEC", "200000"}});
   std::vector<std::string> messages;
   int code = -1;
   const auto deadline = Clock::now() + std::chrono::seconds(20);
   while (Clock::now() < deadline && code == -1) {
     for (std::string m = socket.receive(); !m.empty(); m = socket.receive()) messages.push_back(m);
-    code = navd.wait_exit(std::chrono::milliseconds(1));
+    code = survey.wait_exit(std::chrono::milliseconds(1));
   }
   for (std::string m = socket.receive(); !m.empty(); m = socket.receive()) messages.push_back(m);
-  ASSERT_EQ(code, 0) << navd.err();
+  ASSERT_EQ(code, 0) << survey.err();
   auto count = [&](const std::string& prefix) {
     int n = 0;
     for (const std::string& m : messages) n += m.rfind(prefix, 0) == 0 ? 1 : 0;
@@ -264,18 +279,19 @@ TEST(NavdSim, NotifiesSystemdReadyWatchdogStatusStopping) {
   EXPECT_EQ(messages.back(), "STOPPING=1");
 }
 
-TEST(NavdSim, SigtermStopsWithinOneSecondAndExitsZero) {
+TEST(NavtoolSurvey, SigtermStopsWithinOneSecondAndExitsZero) {
   const SimDir sim(12);  // ~100 s of dive at 5x: still replaying when SIGTERM comes
-  NavdProcess navd({"--config", sim.config().string(), "--speed", "5"});
+  SurveyProcess survey({"--config", sim.config().string(), "--speed", "5"});
   std::this_thread::sleep_for(std::chrono::milliseconds(2500));
-  ASSERT_EQ(navd.wait_exit(std::chrono::milliseconds(1)), -1) << "navd ended early: " << navd.err();
+  ASSERT_EQ(survey.wait_exit(std::chrono::milliseconds(1)), -1)
+      << "navtool survey ended early: " << survey.err();
   const auto sent = Clock::now();
-  ASSERT_EQ(::kill(navd.pid(), SIGTERM), 0);
-  const int code = navd.wait_exit(std::chrono::seconds(5));
+  ASSERT_EQ(::kill(survey.pid(), SIGTERM), 0);
+  const int code = survey.wait_exit(std::chrono::seconds(5));
   const double stop_s = std::chrono::duration<double>(Clock::now() - sent).count();
-  EXPECT_EQ(code, 0) << navd.err();
+  EXPECT_EQ(code, 0) << survey.err();
   EXPECT_LT(stop_s, 1.0);
-  const json j = json::parse(navd.out());
+  const json j = json::parse(survey.out());
   EXPECT_GT(j["measurements"].get<int>(), 0);
   EXPECT_LT(j["images"].get<int>(), 12);  // stopped before the end
 }
@@ -283,15 +299,14 @@ TEST(NavdSim, SigtermStopsWithinOneSecondAndExitsZero) {
 /// The last health_t of a replay: memory from /proc, and an innovation record for each sensor
 /// of config/sim.yaml that the filter updates from.
 void expect_health_usage_and_innovations(const navlcm::health_t& h) {
-  std::printf("last health_t: cpu %.1f %%, rss %.1f MiB, peak %.1f MiB\n", h.cpu_percent,
-              h.rss_mb, h.peak_rss_mb);
+  std::printf("last health_t: cpu %.1f %%, rss %.1f MiB, peak %.1f MiB\n", h.cpu_percent, h.rss_mb,
+              h.peak_rss_mb);
   for (const navlcm::sensor_health_t& s : h.sensors) {
     std::printf("  %-10s updates %lld rejected %lld NIS mean %.3f (expected %.2f) last %.3f\n",
                 s.name.c_str(), static_cast<long long>(s.updates),
-                static_cast<long long>(s.rejected_updates), s.nis_mean, s.nis_expected,
-                s.nis_last);
+                static_cast<long long>(s.rejected_updates), s.nis_mean, s.nis_expected, s.nis_last);
   }
-  EXPECT_GT(h.rss_mb, 10.0);  // navd with the map: tens of MB
+  EXPECT_GT(h.rss_mb, 10.0);  // the replay with the map: tens of MB
   EXPECT_GE(h.peak_rss_mb, h.rss_mb);
   EXPECT_GE(h.cpu_percent, 0.0);
   for (const char* name : {"dvl", "heading", "depth"}) {
@@ -312,11 +327,11 @@ void expect_health_usage_and_innovations(const navlcm::health_t& h) {
   }
 }
 
-TEST(NavdSim, PublishesSolutionAndHealthOverUdpm) {
+TEST(NavtoolSurvey, PublishesSolutionAndHealthOverUdpm) {
   if (!kNet.ok) GTEST_SKIP() << kNet.reason;
   lcm::LCM lcm(kUdpmUrl);
   ASSERT_TRUE(lcm.good()) << "LCM cannot open " << kUdpmUrl << " in the test's namespace";
-  ASSERT_TRUE(nav::tool::test::udpm_loops_back(lcm, "NAVD_SIM_TEST_PROBE"));
+  ASSERT_TRUE(nav::tool::test::udpm_loops_back(lcm, "NAVTOOL_SURVEY_TEST_PROBE"));
   int solutions = 0, health = 0;
   navlcm::nav_solution_t last{};
   navlcm::health_t last_health{};
@@ -341,10 +356,10 @@ TEST(NavdSim, PublishesSolutionAndHealthOverUdpm) {
   lcm.subscribe("NAVD_SOLUTION", &Handler::on_solution, &handler);
   lcm.subscribe("NAVD_HEALTH", &Handler::on_health, &handler);
   const SimDir sim(12);
-  NavdProcess navd(
+  SurveyProcess survey(
       {"--config", sim.config().string(), "--speed", "50"});  // config/sim.yaml's udpm URL
   const auto deadline = Clock::now() + std::chrono::seconds(20);
-  while (Clock::now() < deadline && navd.wait_exit(std::chrono::milliseconds(1)) == -1) {
+  while (Clock::now() < deadline && survey.wait_exit(std::chrono::milliseconds(1)) == -1) {
     lcm.handleTimeout(20);
   }
   for (int i = 0; i < 5; ++i) lcm.handleTimeout(20);
@@ -362,33 +377,34 @@ TEST(NavdSim, PublishesSolutionAndHealthOverUdpm) {
   expect_health_usage_and_innovations(last_health);
 }
 
-TEST(NavdSim, WithoutAMulticastRouteTheConfigsUdpmFallsBackToMemqWithTheFix) {
+TEST(NavtoolSurvey, WithoutAMulticastRouteTheConfigsUdpmFallsBackToMemqWithTheFix) {
   if (!kNet.ok) GTEST_SKIP() << kNet.reason;  // namespaces: the same permission
   const SimDir sim(3);
-  NavdProcess navd({"--config", sim.config().string(), "--as-fast-as-possible"}, {}, true);
-  ASSERT_EQ(navd.wait_exit(std::chrono::seconds(60)), 0) << navd.err();
-  const std::string err = navd.err();
+  SurveyProcess survey({"--config", sim.config().string(), "--as-fast-as-possible"}, {}, true);
+  ASSERT_EQ(survey.wait_exit(std::chrono::seconds(60)), 0) << survey.err();
+  const std::string err = survey.err();
   EXPECT_NE(err.find("cannot open LCM at 'udpm://239.255.76.67:7667?ttl=0'"), std::string::npos)
       << err;
   EXPECT_NE(err.find("ip route add 224.0.0.0/4 dev lo"), std::string::npos) << err;
   EXPECT_NE(err.find("publishing in-process only (memq://)"), std::string::npos) << err;
-  EXPECT_EQ(json::parse(navd.out())["images"].get<int>(), 3);  // the dive ran all the same
+  EXPECT_EQ(json::parse(survey.out())["images"].get<int>(), 3);  // the dive ran all the same
 }
 
-TEST(NavdSim, LcmUrlOptionThatCannotBeOpenedStopsWithTheFix) {
+TEST(NavtoolSurvey, LcmUrlOptionThatCannotBeOpenedStopsWithTheFix) {
   if (!kNet.ok) GTEST_SKIP() << kNet.reason;
   const SimDir sim(3);
-  NavdProcess navd({"--config", sim.config().string(), "--lcm-url", kUdpmUrl}, {}, true);
-  EXPECT_EQ(navd.wait_exit(std::chrono::seconds(20)), 2) << navd.err();
-  EXPECT_NE(navd.err().find("ip route add 224.0.0.0/4 dev lo"), std::string::npos) << navd.err();
-  EXPECT_TRUE(navd.out().empty()) << navd.out();
+  SurveyProcess survey({"--config", sim.config().string(), "--lcm-url", kUdpmUrl}, {}, true);
+  EXPECT_EQ(survey.wait_exit(std::chrono::seconds(20)), 2) << survey.err();
+  EXPECT_NE(survey.err().find("ip route add 224.0.0.0/4 dev lo"), std::string::npos)
+      << survey.err();
+  EXPECT_TRUE(survey.out().empty()) << survey.out();
 }
 
-TEST(NavdSim, CheckpointsAreWrittenAndResumedWithCheckpointsLikeReplay) {
+TEST(NavtoolSurvey, CheckpointsAreWrittenAndResumedWithCheckpointsLikeReplay) {
   const SimDir sim(8);
   sim.set_checkpoints(0.2);
   {  // paced (~3 s of dive at 20x), stopped by SIGTERM once a checkpoint is there
-    NavdProcess first({"--config", sim.config().string(), "--speed", "20", "--checkpoints"});
+    SurveyProcess first({"--config", sim.config().string(), "--speed", "20", "--checkpoints"});
     const auto deadline = Clock::now() + std::chrono::seconds(30);
     while (Clock::now() < deadline && !(std::filesystem::exists(sim.checkpoints()) &&
                                         !std::filesystem::is_empty(sim.checkpoints()))) {
@@ -398,7 +414,8 @@ TEST(NavdSim, CheckpointsAreWrittenAndResumedWithCheckpointsLikeReplay) {
     ASSERT_EQ(first.wait_exit(std::chrono::seconds(5)), 0) << first.err();
     EXPECT_LT(json::parse(first.out())["images"].get<int>(), 8) << "ended before the SIGTERM";
   }
-  NavdProcess second({"--config", sim.config().string(), "--as-fast-as-possible", "--checkpoints"});
+  SurveyProcess second(
+      {"--config", sim.config().string(), "--as-fast-as-possible", "--checkpoints"});
   ASSERT_EQ(second.wait_exit(std::chrono::seconds(60)), 0) << second.err();
   EXPECT_NE(second.err().find("navd: resumed from " + sim.checkpoints().string()),
             std::string::npos)
@@ -406,8 +423,8 @@ TEST(NavdSim, CheckpointsAreWrittenAndResumedWithCheckpointsLikeReplay) {
   EXPECT_EQ(json::parse(second.out())["images"].get<int>(), 8);
   // The same dive directory simulated again with other options is another input: its
   // checkpoints are not resumed.
-  NavdProcess other({"--config", sim.config().string(), "--images", "9", "--as-fast-as-possible",
-                     "--checkpoints"});
+  SurveyProcess other({"--config", sim.config().string(), "--images", "9", "--as-fast-as-possible",
+                       "--checkpoints"});
   ASSERT_EQ(other.wait_exit(std::chrono::seconds(60)), 0) << other.err();
   EXPECT_EQ(other.err().find("resumed from"), std::string::npos) << other.err();
   EXPECT_NE(other.err().find("checkpoint of another input"), std::string::npos) << other.err();
