@@ -151,7 +151,7 @@ class SimDir {
   std::filesystem::path dir_;
 };
 
-TEST(NavtoolSurvey, DefaultModeSimulatesReplaysReportsThenReusesTheDive) {
+TEST(NavtoolSurvey, SimulatesReplaysReportsThenReusesTheDive) {
   constexpr int kImages = 12;
   const SimDir sim(kImages);
   SurveyProcess first({"--config", sim.config().string(), "--as-fast-as-possible", "--out",
