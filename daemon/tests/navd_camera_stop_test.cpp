@@ -6,7 +6,7 @@
 // stopped, 1 s later navd gets SIGTERM.
 // Contract asserted: exit status 0 within kStopBound of the SIGTERM (wall, including process
 // teardown; generous for a loaded 2-core machine) and the shutdown checkpoint on disk. The
-// measured stop time is in daemon/src/navd/README.md (about 0.35 s; 14 s before the fix).
+// measured stop time is in daemon/apps/navd/README.md (about 0.35 s; 14 s before the fix).
 // Skips with the reason when the fake camera binary is absent or namespaces are not permitted.
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -30,7 +30,7 @@
 
 extern char** environ;
 
-namespace nav::navd {
+namespace nav::daemon::service {
 namespace {
 
 namespace fs = std::filesystem;
@@ -190,4 +190,4 @@ INSTANTIATE_TEST_SUITE_P(Camera, NavdCameraStop, ::testing::Values(0, SIGKILL, S
                          signal_name);
 
 }  // namespace
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

@@ -1,9 +1,11 @@
-// navd configuration errors end to end (issue "navd" §4, §7): the real navd binary (NAVD_PATH)
-// started on config/sim.yaml with one defect each — unknown key, wrong type, out-of-range value,
-// missing file, YAML syntax error, bad or missing CAN signal table — must exit with status 2
-// before starting anything, and stderr must name the file, the key path and the reason. The
-// unmodified config is the control: it runs a 2-image survey and exits 0. Runs from the source
-// directory (CTest WORKING_DIRECTORY).
+// navd configuration errors end to end: the real navd binary (NAVD_PATH) started on
+// config/sim.yaml with one defect each — unknown key, wrong type, out-of-range value, missing
+// file, YAML syntax error, bad or missing CAN signal table — must exit with status 2 before
+// starting anything, and stderr must name the file, the key path and the reason. The unmodified
+// config is the control: navd refuses it (all its sensors are simulated) with the command that
+// runs it, and that command (`navtool survey`, NAVTOOL_PATH) runs a 2-image survey on it and
+// exits 0. A config with neither devices nor a `sim` section is "nothing to run". Runs from the
+// source directory (CTest WORKING_DIRECTORY).
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -56,11 +58,14 @@ class NavdConfigErrors : public ::testing::Test {
     return dir_ / name;
   }
 
-  /// navd --config <config> on a 2-image survey as fast as possible, in the temp dir.
-  NavdRun run(const fs::path& config) {
-    const std::string command = "cd '" + dir_.string() + "' && '" + NAVD_PATH + "' --config '" +
-                                config.string() +
-                                "' --images 2 --as-fast-as-possible >stdout.txt 2>stderr.txt";
+  /// navd --config <config> (or `navtool survey --config <config>` on a 2-image survey as
+  /// fast as possible) in the temp dir.
+  NavdRun run(const fs::path& config, bool survey = false) {
+    const std::string program =
+        survey ? std::string("'") + NAVTOOL_PATH + "' survey" : std::string("'") + NAVD_PATH + "'";
+    const std::string command =
+        "cd '" + dir_.string() + "' && " + program + " --config '" + config.string() + "'" +
+        (survey ? " --images 2 --as-fast-as-possible" : "") + " >stdout.txt 2>stderr.txt";
     const int status = std::system(command.c_str());
     return NavdRun{WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(dir_ / "stdout.txt"),
                    slurp(dir_ / "stderr.txt")};
@@ -82,9 +87,28 @@ class NavdConfigErrors : public ::testing::Test {
   std::string sim_yaml_;
 };
 
-TEST_F(NavdConfigErrors, UnmodifiedSimConfigRuns) {
-  const NavdRun r = run(write("good.yaml", sim_yaml_));
-  EXPECT_EQ(r.exit_code, 0) << r.err;
+TEST_F(NavdConfigErrors, UnmodifiedSimConfigIsRefusedByNavdAndRunByNavtoolSurvey) {
+  const fs::path good = write("good.yaml", sim_yaml_);
+  const NavdRun navd = run(good);
+  EXPECT_EQ(navd.exit_code, 2) << navd.err;
+  EXPECT_NE(navd.err.find("good.yaml: sensors: every sensor's transport is `sim`"),
+            std::string::npos)
+      << navd.err;
+  EXPECT_NE(navd.err.find("`navtool survey --config " + good.string() + "`"), std::string::npos)
+      << navd.err;
+  EXPECT_TRUE(navd.out.empty()) << "navd ran: " << navd.out;
+  const NavdRun survey = run(good, true);
+  EXPECT_EQ(survey.exit_code, 0) << survey.err;
+  EXPECT_NE(survey.out.find("\"images\":2"), std::string::npos) << survey.out;
+}
+
+TEST_F(NavdConfigErrors, NoDeviceAndNoSimSectionIsNothingToRun) {
+  const NavdRun r = run(write("nosim.yaml", sim_yaml_.substr(0, sim_yaml_.find("\nsim:") + 1)));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("nosim.yaml: sim: no --replay, no sensor with a hardware transport and "
+                       "no `sim` section: nothing to run"),
+            std::string::npos)
+      << r.err;
 }
 
 TEST_F(NavdConfigErrors, UnknownKey) {

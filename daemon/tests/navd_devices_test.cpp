@@ -19,7 +19,7 @@
 #include "support/net_namespace.h"
 #include "support/udpm_probe.h"
 
-namespace nav::navd {
+namespace nav::daemon::service {
 namespace {
 
 namespace fs = std::filesystem;
@@ -107,4 +107,4 @@ TEST(NavdDevices, SerialSensorThreadPublishesRawBytesAndHealth) {
 }
 
 }  // namespace
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

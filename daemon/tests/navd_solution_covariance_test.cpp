@@ -17,11 +17,11 @@
 #include "nav/core/recovery/exact_marginals.h"
 #include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/nav_filter.h"
-#include "navd/link_publisher.h"
-#include "navd/solution_board.h"
+#include "nav/daemon/service/link_publisher.h"
+#include "nav/daemon/service/solution_board.h"
 #include "support/synthetic_dive.h"
 
-namespace nav::navd {
+namespace nav::daemon::service {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
@@ -107,4 +107,4 @@ TEST(NavdSolutionCovariance, RobotOnlyCovarianceGivesBackTheInitialCovariance) {
 }
 
 }  // namespace
-}  // namespace nav::navd
+}  // namespace nav::daemon::service

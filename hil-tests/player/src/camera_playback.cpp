@@ -9,7 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <variant>
 
-#include "host_clock.h"
+#include "nav/daemon/system/host_clock.h"
 #include "nav/daemon/log/dive_log.h"
 
 namespace nav::hil {
@@ -79,7 +79,7 @@ void CameraPlayback::run() {
       const double offset_us =
           static_cast<double>(image->time_of_validity_us + latency_us_ - dive_start_us_);
       const std::int64_t due_us = host_start_us_ + std::llround(offset_us / speed_);
-      if (!sleep_until_us(due_us - lead_us_, stop_)) break;
+      if (!daemon::sleep_until_monotonic_us(due_us - lead_us_, stop_)) break;
       if (!frame.empty()) ++report_.with_frame;
       ++report_.images;
       camera_.fire(std::move(frame), due_us);

@@ -18,7 +18,7 @@
 #include "camera_playback.h"
 #include "can_output.h"
 #include "fake_gige_camera.h"
-#include "host_clock.h"
+#include "nav/daemon/system/host_clock.h"
 #include "nav/daemon/config/config.h"
 #include "nav/daemon/log/dive_log.h"
 #include "nav/hil/pty_link.h"
@@ -250,7 +250,7 @@ PlayReport DivePlayer::play(const std::atomic<bool>& stop) {
       }
       const double at_us =
           static_cast<double>(reg->utime - *realtime_minus_monotonic_us - report.dive_start_us);
-      sleep_until_us(report.host_start_us + std::llround(at_us / speed), stop);
+      daemon::sleep_until_monotonic_us(report.host_start_us + std::llround(at_us / speed), stop);
       if (stop.load()) break;
       if (impl_->publish_registration(*reg)) {
         ++report.registrations_played;
@@ -266,7 +266,7 @@ PlayReport DivePlayer::play(const std::atomic<bool>& stop) {
     if (!report.started) impl_->start_clock(raw->host_monotonic_us, report);
     const double offset_us = static_cast<double>(raw->host_monotonic_us - report.dive_start_us);
     const std::int64_t due_us = report.host_start_us + std::llround(offset_us / speed);
-    sleep_until_us(due_us, stop);
+    daemon::sleep_until_monotonic_us(due_us, stop);
     if (stop.load()) break;
     last_write_us = daemon::monotonic_us();
     report.max_late_s = std::max(report.max_late_s, (last_write_us - due_us) * 1e-6);

@@ -11,7 +11,7 @@
 #include <fstream>
 #include <vector>
 
-#include "host_clock.h"
+#include "nav/daemon/system/host_clock.h"
 #include "nav/drivers/transports/mono_unpack.h"
 
 namespace nav::hil {
