@@ -42,18 +42,18 @@ struct LcmBridge::Impl {
     return true;
   }
 
-  void on_solution(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  void on_solution(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     navlcm::nav_solution_t m;
     if (!decode(rbuf, &m)) return;
-    server.publish_view(channel, to_json(m), channel);
+    server.publish_view("NAVD_SOLUTION", to_json(m), "NAVD_SOLUTION");
     server.publish_foxglove(foxglove_channel_id("/navd/pose"), receive_ns(rbuf), pose_in_frame(m));
     server.publish_foxglove(foxglove_channel_id("NAVD_SOLUTION"), receive_ns(rbuf), to_json(m));
   }
 
-  void on_health(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  void on_health(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     navlcm::health_t m;
     if (!decode(rbuf, &m)) return;
-    server.publish_view(channel, to_json(m), channel);
+    server.publish_view("NAVD_HEALTH", to_json(m), "NAVD_HEALTH");
     server.publish_foxglove(foxglove_channel_id("/navd/log"), receive_ns(rbuf), health_log(m));
     server.publish_foxglove(foxglove_channel_id("NAVD_HEALTH"), receive_ns(rbuf), to_json(m));
   }
@@ -62,7 +62,7 @@ struct LcmBridge::Impl {
     for (const auto& s : states) {
       state_positions[s.state_id] = {s.mean_pose[0], s.mean_pose[1], s.mean_pose[2]};
       // One retained frame per state: a late page gets every state's latest bound.
-      server.publish_view(channels.bounds, to_json(s), "bound/" + std::to_string(s.state_id));
+      server.publish_view("NAVD_BOUNDS", to_json(s), "bound/" + std::to_string(s.state_id));
     }
     server.publish_foxglove(foxglove_channel_id("/navd/bounds"), t, bounds_scene_update(states));
   }
@@ -77,12 +77,12 @@ struct LcmBridge::Impl {
     if (decode(rbuf, &m)) publish_bounds(m.states, receive_ns(rbuf));
   }
 
-  void on_link(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  void on_link(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     navlcm::camera_link_t m;
     if (!decode(rbuf, &m)) return;
     const std::string key =
         "link/" + std::to_string(m.state_id_i) + "-" + std::to_string(m.state_id_j);
-    server.publish_view(channel, to_json(m), key);
+    server.publish_view("NAVD_CAMERA_LINKS", to_json(m), key);
     // Temporal: no known delayed state lies between the two (consecutive images).
     const std::int64_t lo = std::min(m.state_id_i, m.state_id_j);
     const std::int64_t hi = std::max(m.state_id_i, m.state_id_j);
@@ -93,10 +93,10 @@ struct LcmBridge::Impl {
     server.publish_foxglove(foxglove_channel_id("NAVD_CAMERA_LINKS"), receive_ns(rbuf), to_json(m));
   }
 
-  void on_proposal(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  void on_proposal(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     navlcm::link_proposal_t m;
     if (!decode(rbuf, &m)) return;
-    server.publish_view(channel, to_json(m), "proposal/" + std::to_string(m.sequence));
+    server.publish_view("NAV_LINK_PROPOSAL", to_json(m), "proposal/" + std::to_string(m.sequence));
     server.publish_foxglove(foxglove_channel_id("NAV_LINK_PROPOSAL"), receive_ns(rbuf), to_json(m));
   }
 };

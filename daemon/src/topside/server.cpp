@@ -67,7 +67,7 @@ struct TopsideServer::Impl {
   ServerOptions options;
   WsServer ws;
   std::thread io_thread;
-  bool started = false;
+  std::atomic<bool> started{false};  // publish_*() before start() only retains
 
   mutable std::recursive_mutex mutex;  // guards clients, retained, stats
   std::map<Hdl, std::shared_ptr<Client>, std::owner_less<Hdl>> clients;
@@ -255,7 +255,9 @@ void TopsideServer::Impl::arm_timer() {
 }
 
 void TopsideServer::Impl::wake() {
-  if (!flush_pending.exchange(true)) asio::post(ws.get_io_service(), [this] { flush_all(); });
+  if (started && !flush_pending.exchange(true)) {
+    asio::post(ws.get_io_service(), [this] { flush_all(); });
+  }
 }
 
 TopsideServer::TopsideServer(ServerOptions options)

@@ -66,10 +66,13 @@ inline std::string file_text(const std::filesystem::path& path) {
 
 /// Starts `navtool topside` on 127.0.0.1:`port` and waits for its {"url": ...} line; the pid
 /// (stop it with stop_child) or -1 if it did not come up within 10 s.
-inline pid_t start_topside(const std::string& lcm_url, int port, const std::filesystem::path& dir) {
-  const pid_t pid = spawn_process({NAVTOOL_PATH, "topside", "--lcm-url", lcm_url, "--listen",
-                                   "127.0.0.1:" + std::to_string(port)},
-                                  dir / "topside.stdout", dir / "topside.stderr");
+/// `extra`: more arguments (e.g. --config).
+inline pid_t start_topside(const std::string& lcm_url, int port, const std::filesystem::path& dir,
+                           const std::vector<std::string>& extra = {}) {
+  std::vector<std::string> argv = {NAVTOOL_PATH, "topside", "--lcm-url", lcm_url, "--listen",
+                                   "127.0.0.1:" + std::to_string(port)};
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  const pid_t pid = spawn_process(argv, dir / "topside.stdout", dir / "topside.stderr");
   for (int i = 0; i < 500; ++i) {
     if (file_text(dir / "topside.stdout").find("\"url\"") != std::string::npos) return pid;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));

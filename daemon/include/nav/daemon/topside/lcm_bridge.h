@@ -2,7 +2,9 @@
 // LcmBridge: the LCM subscriber thread of navtool topside. It decodes navd's channels, turns
 // each message into the page's JSON (lcm_json.h) and the Foxglove schemas (foxglove.h), and
 // publishes both through a TopsideServer. It only subscribes: it never publishes on LCM.
-// A message that does not decode as its channel's type is counted and skipped.
+// A message that does not decode as its channel's type is counted and skipped. The page's feed
+// names channels by navd's default names (NAVD_SOLUTION, NAVD_HEALTH, NAVD_BOUNDS for bounds
+// and snapshot states alike, NAVD_CAMERA_LINKS, NAV_LINK_PROPOSAL) whatever they are called on LCM.
 #include <atomic>
 #include <cstdint>
 #include <memory>

@@ -1,14 +1,14 @@
 // navd topside page: connects to /ws, keeps the model (model.js), draws the map (map.js), the
 // vehicle and health panels and two uPlot time series. window.topside exposes the model.
 import uPlot from 'uplot';
-import { createModel, applyFrame, sensorAgeS, sensorState, STALE_AFTER_S } from './model.js';
+import { createModel, applyFrame, sensorAgeS, sensorState, lastActivityMs, STALE_AFTER_S } from './model.js';
 import { drawMap } from './map.js';
 
 const model = createModel();
 const $ = (id) => document.getElementById(id);
 let dirty = true;
 let feedUp = false;
-window.topside = { model, drawn: null };
+window.topside = { model, drawn: null, lastActivityMs: () => lastActivityMs(model) };
 
 function connect() {
   const ws = new WebSocket(`ws://${location.host}/ws`);
@@ -43,15 +43,20 @@ function renderHealth(now) {
     const state = sensorState(model, s, now);
     const age = sensorAgeS(model, s, now);
     return `<tr data-sensor="${escape(s.name)}" class="${state}"><td>${escape(s.name)}</td>` +
-      `<td>${s.connected ? 'yes' : 'NO'}</td><td>${fixed(s.rate_hz, 1)}</td>` +
+      `<td>${s.connected ? 'yes' : s.records > 0 ? 'NO' : 'log'}</td><td>${fixed(s.rate_hz, 1)}</td>` +
       `<td>${isFinite(age) ? fixed(age, 1) : 'never'}</td>` +
       `<td class="${s.decode_errors > 0 ? 'faulty' : ''}">${s.decode_errors}</td>` +
       `<td>${s.nis_mean >= 0 ? fixed(s.nis_mean, 2) : '–'} / ${fixed(s.nis_expected, 1)}</td>` +
       `<td>${s.updates} / ${s.rejected_updates}</td></tr>`;
   });
+  for (const c of model.configSensors) {  // configured, but absent from navd's health
+    if (h.sensors.some((s) => s.name === c.name)) continue;
+    rows.push(`<tr data-sensor="${escape(c.name)}" class="stale"><td>${escape(c.name)}</td>` +
+              `<td colspan="6">${escape(c.type)}: not reported in navd's health</td></tr>`);
+  }
   body.innerHTML = rows.join('');
   const dvl = h.sensors.find((s) => /dvl/i.test(s.name));
-  const lock = dvl && sensorState(model, dvl, now) === 'ok' && dvl.rate_hz > 0 &&
+  const lock = dvl && sensorState(model, dvl, now) === 'ok' &&
                (dvl.last.length === 0 || dvl.last.some((a) => a.fused));
   $('dvl-lock').textContent = dvl ? (lock ? 'locked' : 'LOST') : 'no DVL';
   $('dvl-lock').className = lock ? 'ok' : 'faulty';

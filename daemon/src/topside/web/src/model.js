@@ -13,6 +13,8 @@ export function createModel() {
     proposals: new Map(),      // sequence -> link_proposal_t JSON
     sigmaSeries: [[], []],     // t s, sigma_xy m
     nisSeries: new Map(),      // sensor -> [[t], [nis_mean]]
+    activity: new Map(),       // sensor -> {count, changedMs}: when its counters last moved
+    configSensors: [],         // [{name, type}] from navtool topside --config
   };
 }
 
@@ -35,6 +37,7 @@ export function applyFrame(model, frame, nowMs) {
       model.health = m;
       model.healthReceivedMs = nowMs;
       for (const s of m.sensors) {
+        noteActivity(model, s, nowMs);
         if (!model.nisSeries.has(s.name)) model.nisSeries.set(s.name, [[], []]);
         pushSeries(model.nisSeries.get(s.name), m.utime / 1e6, s.nis_mean >= 0 ? s.nis_mean : null);
       }
@@ -44,6 +47,9 @@ export function applyFrame(model, frame, nowMs) {
       return true;
     case 'NAVD_CAMERA_LINKS':
       model.links.set(`${m.state_id_i}-${m.state_id_j}`, m);
+      return true;
+    case 'TOPSIDE_CONFIG':
+      model.configSensors = m.sensors;
       return true;
     case 'NAV_LINK_PROPOSAL':
       model.proposals.set(m.sequence, m);
@@ -80,15 +86,39 @@ export function pendingProposals(model) {
   return out;
 }
 
-/// A sensor's last-message age now: the age navd reported plus the time since that report.
+// A sensor's activity: records decoded plus updates fused or refused. navd reports
+// last_message_age_s only for device sensors (-1 in replay), so the page also times when these
+// counters last moved, which covers replayed and device sensors alike.
+function noteActivity(model, s, nowMs) {
+  const count = s.records + s.updates + s.rejected_updates;
+  const prev = model.activity.get(s.name);
+  if (!prev) {
+    const age = s.last_message_age_s >= 0 ? s.last_message_age_s * 1000 : 0;
+    model.activity.set(s.name, { count, changedMs: count > 0 ? nowMs - age : -Infinity });
+  } else if (count !== prev.count) {
+    model.activity.set(s.name, { count, changedMs: nowMs });
+  }
+}
+
+/// A sensor's last-message age now (s): the younger of navd's reported age (extrapolated from
+/// the health message) and the time since the sensor's counters last moved; Infinity if never.
 export function sensorAgeS(model, sensor, nowMs) {
-  if (sensor.last_message_age_s < 0) return Infinity;
-  return sensor.last_message_age_s + (nowMs - model.healthReceivedMs) / 1000;
+  const act = model.activity.get(sensor.name);
+  const byCounters = act ? (nowMs - act.changedMs) / 1000 : Infinity;
+  if (sensor.last_message_age_s < 0) return byCounters;
+  return Math.min(byCounters, sensor.last_message_age_s + (nowMs - model.healthReceivedMs) / 1000);
+}
+
+/// The newest sensor activity seen (ms, page clock), -Infinity if none.
+export function lastActivityMs(model) {
+  let t = -Infinity;
+  for (const a of model.activity.values()) t = Math.max(t, a.changedMs);
+  return t;
 }
 
 /// 'ok' | 'stale' | 'faulty' for one sensor row.
 export function sensorState(model, sensor, nowMs) {
-  if (!sensor.connected) return 'faulty';
+  if (!sensor.connected && sensor.records > 0) return 'faulty';  // a device that vanished
   if (sensorAgeS(model, sensor, nowMs) > STALE_AFTER_S) return 'stale';
   if (sensor.nis_mean >= 0 && sensor.nis_expected > 0 && sensor.nis_mean > 3 * sensor.nis_expected) return 'faulty';
   return 'ok';
