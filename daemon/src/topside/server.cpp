@@ -93,6 +93,11 @@ void TopsideServer::Impl::setup() {
   ws.set_reuse_addr(true);
   ws.set_max_message_size(options.max_message_bytes);
   ws.set_max_http_body_size(options.max_message_bytes);
+  // Small frames at 10 Hz: no Nagle delay (it would hold a frame until the previous is acked).
+  ws.set_socket_init_handler([](Hdl, asio::ip::tcp::socket& socket) {
+    asio::error_code ignored;
+    socket.set_option(asio::ip::tcp::no_delay(true), ignored);
+  });
   ws.set_validate_handler([this](Hdl hdl) {
     WsServer::connection_ptr con = ws.get_con_from_hdl(hdl);
     for (const std::string& p : con->get_requested_subprotocols()) {
