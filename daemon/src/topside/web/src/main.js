@@ -2,7 +2,7 @@
 // vehicle and health panels and two uPlot time series. window.topside exposes the model.
 import uPlot from 'uplot';
 import { createModel, applyFrame, sensorAgeS, sensorState, lastActivityMs, STALE_AFTER_S } from './model.js';
-import { drawMap } from './map.js';
+import { drawMap, accuracyColor } from './map.js';
 
 const model = createModel();
 const $ = (id) => document.getElementById(id);
@@ -27,6 +27,7 @@ function renderVehicle(now) {
   $('heading').textContent = fixed(((s.heading_rad * 180 / Math.PI) % 360 + 360) % 360, 1);
   $('speed').textContent = fixed(s.speed_mps, 2);
   $('sigma').textContent = fixed(s.sigma_xy_m, 2);
+  $('sigma').style.color = accuracyColor(s.sigma_xy_m);
   const age = (now - model.solutionReceivedMs) / 1000;
   $('solution-age').textContent = fixed(age, 1);
   $('solution-age').className = age > STALE_AFTER_S ? 'stale' : 'ok';

@@ -66,13 +66,13 @@ export function drawMap(canvas, model, nowMs, staleAfterS) {
     ctx.globalAlpha = stale ? 0.35 : 1.0;
     const [x, y] = toScreen(sol.p_world_m[0], sol.p_world_m[1]);
     const el = sol.ellipse_1sigma;
-    ctx.strokeStyle = COLORS.vehicle; ctx.lineWidth = 1.5;
+    ctx.strokeStyle = accuracyColor(sol.sigma_xy_m); ctx.lineWidth = 1.5;
     ctx.beginPath();
     ctx.ellipse(x, y, Math.max(el.semi_major_m * scale, 0.5), Math.max(el.semi_minor_m * scale, 0.5), el.angle_rad - Math.PI / 2, 0, 2 * Math.PI);
     ctx.stroke();
     const psi = sol.heading_rad, r = 12;
     const dir = [Math.sin(psi), -Math.cos(psi)], side = [Math.cos(psi), Math.sin(psi)];
-    ctx.fillStyle = stale ? '#888' : COLORS.vehicle;
+    ctx.fillStyle = stale ? '#888' : accuracyColor(sol.sigma_xy_m);
     ctx.beginPath();
     ctx.moveTo(x + dir[0] * r, y + dir[1] * r);
     ctx.lineTo(x - dir[0] * r * 0.6 + side[0] * r * 0.5, y - dir[1] * r * 0.6 + side[1] * r * 0.5);
@@ -81,6 +81,11 @@ export function drawMap(canvas, model, nowMs, staleAfterS) {
     ctx.globalAlpha = 1.0;
   }
   return { states: model.states.size, links: temporal + loop, temporal, loop, pending: pending.length };
+}
+
+/// Position accuracy as colour: green below 1 m (1 sigma), yellow below 5 m, red beyond.
+export function accuracyColor(sigmaM) {
+  return sigmaM < 1 ? '#3ccf6e' : sigmaM < 5 ? '#ffe14f' : '#ff5a4f';
 }
 
 function line(ctx, [x0, y0], [x1, y1], color, width, dash) {
