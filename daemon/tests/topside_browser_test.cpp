@@ -114,6 +114,9 @@ TEST(TopsideBrowser, PageShowsNavdReplayAndTurnsStale) {
   ASSERT_FALSE(shown["stale_after_last_health_ms"].is_null()) << "rows never turned stale";
   EXPECT_LE(shown["stale_after_last_sensor_message_ms"].get<double>(), 3000.0);
   std::printf("screenshots: %s/topside.png, topside-stale.png\n", dir.c_str());
+  std::error_code ignored;  // keep the screenshots and logs, not the dive
+  fs::remove_all(dive, ignored);
+  fs::remove_all(dir / "navd", ignored);
 }
 
 }  // namespace
