@@ -19,7 +19,9 @@
 // Confidence. With the depth interval holding probability sqrt(c) (k_d the two-sided normal
 // quantile) and g = chi2_2^-1(sqrt(c)), the true correspondence lies in the region with
 // probability >= sqrt(c) * sqrt(c) = c, to first order in the pose (the depth is exact along
-// the segment). c = PccsOptions::confidence.
+// the segment). c = PccsOptions::confidence. The bound is conservative: inside the interval
+// the error along the epipolar line is absorbed by the depth freedom, so only the 1-D error
+// across the line is really gated (with a 2-D threshold).
 //
 // Matching. Only candidates inside the region are compared (L2 descriptor distance); the best
 // candidate of u_i is kept when best < ratio * second best among the candidates of its region
@@ -51,6 +53,7 @@ struct PccsOptions {
 struct SearchRegion {
   std::vector<Eigen::Vector2d> centres_px;   ///< u_j(d_k) at the depth samples, near to far.
   std::vector<Eigen::Matrix2d> covariances_px2;  ///< S(d_k), same order.
+  std::vector<Eigen::Matrix2d> informations_px2;  ///< S(d_k)^-1, same order.
   std::vector<double> depths_m;              ///< d_k.
   double gate_chi2 = 0.0;                    ///< g.
   Eigen::AlignedBox2d bounds_px;             ///< Bounding box of the whole region.
