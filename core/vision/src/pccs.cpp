@@ -5,7 +5,6 @@
 #include "nav/vision/pccs.h"
 
 #include <Eigen/LU>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -25,7 +24,10 @@ double two_sided_normal_quantile(double p) {
   double lo = 0.0, hi = 40.0;
   for (int it = 0; it < 200; ++it) {
     const double mid = 0.5 * (lo + hi);
-    if (std::erfc(mid / std::sqrt(2.0)) > 1.0 - p) lo = mid; else hi = mid;
+    if (std::erfc(mid / std::sqrt(2.0)) > 1.0 - p)
+      lo = mid;
+    else
+      hi = mid;
   }
   return 0.5 * (lo + hi);
 }
@@ -150,7 +152,8 @@ class PointGrid {
     for (std::size_t c = 1; c < cell_start_.size(); ++c) cell_start_[c] += cell_start_[c - 1];
     index_.resize(points.size());
     std::vector<int> fill(cell_start_.begin(), cell_start_.end() - 1);
-    for (std::size_t k = 0; k < points.size(); ++k) index_[fill[cell_of[k]]++] = static_cast<int>(k);
+    for (std::size_t k = 0; k < points.size(); ++k)
+      index_[fill[cell_of[k]]++] = static_cast<int>(k);
   }
 
   /// Calls f(point index) for every point in the cells overlapping the box [lo, hi].
@@ -165,8 +168,12 @@ class PointGrid {
   }
 
  private:
-  int col(double x) const { return std::clamp(static_cast<int>(std::floor(x / cell_)), 0, cols_ - 1); }
-  int row(double y) const { return std::clamp(static_cast<int>(std::floor(y / cell_)), 0, rows_ - 1); }
+  int col(double x) const {
+    return std::clamp(static_cast<int>(std::floor(x / cell_)), 0, cols_ - 1);
+  }
+  int row(double y) const {
+    return std::clamp(static_cast<int>(std::floor(y / cell_)), 0, rows_ - 1);
+  }
   double cell_;
   int cols_ = 1, rows_ = 1;
   std::vector<int> cell_start_, index_;
@@ -198,8 +205,7 @@ float distance2(const cv::Mat& a, int ia, const cv::Mat& b, int ib) {
 /// mutual check.
 class MatchAccumulator {
  public:
-  MatchAccumulator(std::size_t n_i, std::size_t n_j)
-      : best_i_(n_i), best_j_(n_j) {}
+  MatchAccumulator(std::size_t n_i, std::size_t n_j) : best_i_(n_i), best_j_(n_j) {}
   void add(int i, int j, float d2) {
     Best& b = best_i_[i];
     if (d2 < b.d2) {
@@ -247,10 +253,10 @@ double SearchRegion::mahalanobis2(const Eigen::Vector2d& q) const {
   }
   double best = kInf;
   for (std::size_t k = 0; k + 1 < centres_px.size(); ++k) {
-    best = std::min(best, segment_distance2(q, centres_px[k], centres_px[k + 1],
-                                            informations_px2[k]));
-    best = std::min(best, segment_distance2(q, centres_px[k], centres_px[k + 1],
-                                            informations_px2[k + 1]));
+    best =
+        std::min(best, segment_distance2(q, centres_px[k], centres_px[k + 1], informations_px2[k]));
+    best = std::min(
+        best, segment_distance2(q, centres_px[k], centres_px[k + 1], informations_px2[k + 1]));
   }
   return best;
 }
@@ -273,8 +279,7 @@ SearchRegion search_region(const Eigen::Vector2d& u_i_px, const CameraIntrinsics
 
 PutativeMatches match_pose_constrained(const ImageFeatures& i, const ImageFeatures& j,
                                        const CameraIntrinsics& camera,
-                                       const RelativePosePrior& prior,
-                                       const PccsOptions& options) {
+                                       const RelativePosePrior& prior, const PccsOptions& options) {
   require_descriptors(i, "i");
   require_descriptors(j, "j");
   PutativeMatches out;
@@ -305,8 +310,8 @@ PutativeMatches match_pose_constrained(const ImageFeatures& i, const ImageFeatur
         visited[b] = static_cast<int>(a);
         if (!region.contains(j.points_px[b])) return;
         ++out.descriptor_comparisons;
-        acc.add(static_cast<int>(a), b, distance2(i.descriptors, static_cast<int>(a),
-                                                  j.descriptors, b));
+        acc.add(static_cast<int>(a), b,
+                distance2(i.descriptors, static_cast<int>(a), j.descriptors, b));
       });
     }
   }

@@ -5,7 +5,6 @@
 #include "nav/vision/relative_pose_5dof.h"
 
 #include <Eigen/Cholesky>
-
 #include <cmath>
 #include <sstream>
 #include <stdexcept>

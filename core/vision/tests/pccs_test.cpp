@@ -68,8 +68,8 @@ Containment containment(double scale, int trials, int points, std::uint32_t seed
 
 TEST(Pccs, TrueCorrespondencesInsideTheirRegionsAtTheConfidence) {
   const Containment c = containment(1.0, 200, 100, 1);
-  std::cout << "PCCS containment at confidence 0.999, exact prior covariance: " << c.inside
-            << " / " << c.total << " = " << c.fraction() << "\n";
+  std::cout << "PCCS containment at confidence 0.999, exact prior covariance: " << c.inside << " / "
+            << c.total << " = " << c.fraction() << "\n";
   RecordProperty("containment_exact", std::to_string(c.fraction()));
   EXPECT_GE(c.fraction(), 0.999) << c.inside << " of " << c.total;
 }
@@ -195,8 +195,7 @@ TEST(Pccs, FewerComparisonsThanExhaustiveAndFindsTheTrueMatches) {
   const test::TwoViewScene scene =
       test::make_scene(rng, truth, 1500, kDepthM, kDepthSigmaM, kPixelSigmaPx);
   const FeaturePair f = make_features(rng, scene, 1500, 1.0, 0.15, 500);
-  const PutativeMatches pccs =
-      match_pose_constrained(f.i, f.j, scene.camera, prior, PccsOptions{});
+  const PutativeMatches pccs = match_pose_constrained(f.i, f.j, scene.camera, prior, PccsOptions{});
   const PutativeMatches full = match_exhaustive(f.i, f.j, 0.8, true);
   const Score sp = score(pccs, f), sf = score(full, f);
   std::cout << "distinct texture: PCCS " << pccs.descriptor_comparisons << " comparisons, "
@@ -220,8 +219,7 @@ TEST(Pccs, RepetitiveTextureMatchedInsideRegionsOnly) {
   const test::TwoViewScene scene =
       test::make_scene(rng, truth, 1500, kDepthM, kDepthSigmaM, kPixelSigmaPx);
   const FeaturePair f = make_features(rng, scene, 60, 0.05, 0.06, 500);
-  const PutativeMatches pccs =
-      match_pose_constrained(f.i, f.j, scene.camera, prior, PccsOptions{});
+  const PutativeMatches pccs = match_pose_constrained(f.i, f.j, scene.camera, prior, PccsOptions{});
   const PutativeMatches full = match_exhaustive(f.i, f.j, 0.8, true);
   const Score sp = score(pccs, f), sf = score(full, f);
   std::cout << "repetitive texture: PCCS " << sp.correct << " correct / " << sp.wrong
@@ -263,7 +261,12 @@ TEST(Pccs, GridSearchEqualsBruteForce) {
     double d1 = 1e300, d2 = 1e300;
     for (int b = 0; b < nj; ++b) {
       if (d[a][b] < 0.0) continue;
-      if (d[a][b] < d1) { d2 = d1; d1 = d[a][b]; best = b; } else if (d[a][b] < d2) d2 = d[a][b];
+      if (d[a][b] < d1) {
+        d2 = d1;
+        d1 = d[a][b];
+        best = b;
+      } else if (d[a][b] < d2)
+        d2 = d[a][b];
     }
     if (best < 0 || !(d1 < 0.8 * d2)) continue;
     bool mutual = true;

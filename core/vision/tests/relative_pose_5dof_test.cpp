@@ -7,7 +7,6 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
-
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -67,8 +66,8 @@ TEST(RelativePose5Dof, AgreesWithCameraRelativePoseModel) {
     const Vec5 z = z_from_relative_pose(x_ab);
     EXPECT_LT(z_minus(z, z_model).cwiseAbs().maxCoeff(), 1e-12) << "sample " << k;
     // And via rotation + translation of any length.
-    const Vec5 z_rt = z_from_rotation_translation(core::pose_rotation(x_ab),
-                                                  3.7 * core::pose_translation(x_ab));
+    const Vec5 z_rt =
+        z_from_rotation_translation(core::pose_rotation(x_ab), 3.7 * core::pose_translation(x_ab));
     EXPECT_LT(z_minus(z_rt, z).cwiseAbs().maxCoeff(), 1e-9) << "sample " << k;
   }
 }
@@ -97,8 +96,8 @@ TEST(RelativePose5Dof, JacobiansMatchCentralDifferences) {
     Mat5x6 J;
     const Vec5 z = z_from_relative_pose(x, &J);
     const Eigen::MatrixXd J_num = numeric_jacobian(
-        [](const Eigen::VectorXd& v) { return Eigen::VectorXd(z_from_relative_pose(v)); }, x,
-        1e-6, wrap_minus);
+        [](const Eigen::VectorXd& v) { return Eigen::VectorXd(z_from_relative_pose(v)); }, x, 1e-6,
+        wrap_minus);
     EXPECT_LT(max_abs_diff(J, J_num), kJacobianTol) << "dz/dx, sample " << k;
 
     const double baseline = 0.5 + k * 0.01;

@@ -5,7 +5,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
-
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -46,8 +45,8 @@ inline bool in_image(const CameraIntrinsics& c, const Eigen::Vector2d& u) {
 struct TwoViewScene {
   CameraIntrinsics camera;
   Vec6 x_i_j = Vec6::Zero();
-  std::vector<Eigen::Vector3d> points_i;       ///< Truth, camera i, metres.
-  std::vector<Eigen::Vector2d> u_i, u_j;       ///< Noisy observations.
+  std::vector<Eigen::Vector3d> points_i;  ///< Truth, camera i, metres.
+  std::vector<Eigen::Vector2d> u_i, u_j;  ///< Noisy observations.
   std::vector<Eigen::Vector2d> u_i_true, u_j_true;
   std::size_t size() const { return points_i.size(); }
 };
@@ -62,7 +61,7 @@ inline TwoViewScene make_scene(std::mt19937& rng, const Vec6& x_i_j, int n, doub
   const Eigen::Matrix3d R = core::pose_rotation(x_i_j);
   const Eigen::Vector3d t = core::pose_translation(x_i_j);
   std::uniform_real_distribution<double> ux(0.0, s.camera.width_px), uy(0.0, s.camera.height_px);
-  std::normal_distribution<double> depth(depth_m, depth_sigma_m), noise(0.0, pixel_sigma_px);
+  std::normal_distribution<double> depth(depth_m, depth_sigma_m), n01(0.0, 1.0);
   while (static_cast<int>(s.size()) < n) {
     const Eigen::Vector2d u(ux(rng), uy(rng));
     const double d = depth(rng);
@@ -76,8 +75,8 @@ inline TwoViewScene make_scene(std::mt19937& rng, const Vec6& x_i_j, int n, doub
     s.points_i.push_back(X_i);
     s.u_i_true.push_back(u);
     s.u_j_true.push_back(v);
-    s.u_i.push_back(u + Eigen::Vector2d(noise(rng), noise(rng)));
-    s.u_j.push_back(v + Eigen::Vector2d(noise(rng), noise(rng)));
+    s.u_i.push_back(u + pixel_sigma_px * Eigen::Vector2d(n01(rng), n01(rng)));
+    s.u_j.push_back(v + pixel_sigma_px * Eigen::Vector2d(n01(rng), n01(rng)));
   }
   return s;
 }

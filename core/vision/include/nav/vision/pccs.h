@@ -32,7 +32,6 @@
 // Pure function of its inputs; thread-safe.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
-
 #include <vector>
 
 #include "nav/vision/types.h"
@@ -40,23 +39,23 @@
 namespace nav::vision {
 
 struct PccsOptions {
-  double confidence = 0.999;   ///< Probability that the true correspondence is in its region.
-  double ratio = 0.8;          ///< Lowe ratio test inside the region (best < ratio * second).
-  double pixel_sigma_px = 0.5; ///< Feature localisation noise, each image, each axis.
-  int depth_samples = 8;       ///< Sub-segments of the depth interval (>= 1).
-  double min_depth_m = 0.05;   ///< Near end of the depth interval is clamped to this.
-  int grid_cell_px = 32;       ///< Bucket size of image j's point index.
-  bool mutual = true;          ///< Keep only mutual best matches.
+  double confidence = 0.999;    ///< Probability that the true correspondence is in its region.
+  double ratio = 0.8;           ///< Lowe ratio test inside the region (best < ratio * second).
+  double pixel_sigma_px = 0.5;  ///< Feature localisation noise, each image, each axis.
+  int depth_samples = 8;        ///< Sub-segments of the depth interval (>= 1).
+  double min_depth_m = 0.05;    ///< Near end of the depth interval is clamped to this.
+  int grid_cell_px = 32;        ///< Bucket size of image j's point index.
+  bool mutual = true;           ///< Keep only mutual best matches.
 };
 
 /// Search region of one feature of image i in image j (see the header comment).
 struct SearchRegion {
-  std::vector<Eigen::Vector2d> centres_px;   ///< u_j(d_k) at the depth samples, near to far.
-  std::vector<Eigen::Matrix2d> covariances_px2;  ///< S(d_k), same order.
+  std::vector<Eigen::Vector2d> centres_px;        ///< u_j(d_k) at the depth samples, near to far.
+  std::vector<Eigen::Matrix2d> covariances_px2;   ///< S(d_k), same order.
   std::vector<Eigen::Matrix2d> informations_px2;  ///< S(d_k)^-1, same order.
-  std::vector<double> depths_m;              ///< d_k.
-  double gate_chi2 = 0.0;                    ///< g.
-  Eigen::AlignedBox2d bounds_px;             ///< Bounding box of the whole region.
+  std::vector<double> depths_m;                   ///< d_k.
+  double gate_chi2 = 0.0;                         ///< g.
+  Eigen::AlignedBox2d bounds_px;                  ///< Bounding box of the whole region.
 
   /// False when no depth sample lands in front of camera j (the region is empty).
   bool valid() const { return !centres_px.empty(); }
@@ -85,8 +84,7 @@ SearchRegion search_region(const Eigen::Vector2d& u_i_px, const CameraIntrinsics
 /// point counts.
 PutativeMatches match_pose_constrained(const ImageFeatures& i, const ImageFeatures& j,
                                        const CameraIntrinsics& camera,
-                                       const RelativePosePrior& prior,
-                                       const PccsOptions& options);
+                                       const RelativePosePrior& prior, const PccsOptions& options);
 
 /// Reference without a prior: every pair compared (|i| * |j| comparisons), the same ratio test
 /// and mutual check. For measuring PCCS against and for pairs without a prior.

@@ -28,8 +28,7 @@ using Mat3x2 = Eigen::Matrix<double, 3, 2>;
 inline constexpr double kMinHorizontalBaseline = 1e-9;
 
 /// Unit baseline direction for (azimuth, elevation); J (optional) = d t_unit / d(az, el).
-Eigen::Vector3d baseline_direction(double azimuth_rad, double elevation_rad,
-                                   Mat3x2* J = nullptr);
+Eigen::Vector3d baseline_direction(double azimuth_rad, double elevation_rad, Mat3x2* J = nullptr);
 
 /// z of the relative pose x_i_j = [t; rpy] (|t| arbitrary, not zero); angles wrapped to
 /// (-pi, pi]. J (optional) = dz / dx_i_j (5x6): the azimuth/elevation rows depend on t only,

@@ -11,21 +11,27 @@
 //   sum_k rho(|u_i,k - pi(K X_k)|^2 / s^2) + rho(|u_j,k - pi(K R^T (X_k - t_unit(z)))|^2 / s^2)
 // minimised by Levenberg-Marquardt with the 3x3 point blocks eliminated (Schur complement) at
 // every iteration, robust weights by iteratively reweighted least squares (Triggs section 3.3).
+// Stops on a small relative cost decrease, a small step, or a pose step below
+// pose_step_tolerance_sigma standard deviations of z (S-norm of the step). Then matches with a
+// residual beyond the Huber kink in either image are rejected and the rest re-solved (up to
+// three rounds), so the final solution and its information have unit weights: with gross
+// mismatches the robust loss alone crawls (their points drift along a flat valley of the
+// cost) and would leave down-weighted terms in the covariance.
 // Points start from the linear (DLT) triangulation with the initial (R_i_j, t_unit).
 //
 // Covariance: at the solution, the 5x5 covariance of z is the inverse of the Schur complement
 //   S = H_zz - sum_k H_zk H_kk^-1 H_kz
-// of the information H = J^T W J / sigma^2 (W the final robust weights; 1 for every residual
-// inside the Huber threshold), i.e. the 3-D points are marginalised, equal to the top-left 5x5
+// of the information H = J^T J of the whitened residuals of the kept matches (all inside the
+// Huber kink, so unit weights), i.e. the 3-D points are marginalised: equal to the top-left 5x5
 // block of the dense inverse of H.
 //
 // Failures (converged == false, `reason` says why and with which numbers): fewer than
 // min_points usable matches; too many matches triangulating behind either camera; median
-// parallax below min_parallax_deg (pure rotation / zero baseline); non-finite or singular
+// parallax below min_parallax_deg (pure rotation / zero baseline); more than
+// max_fraction_outliers rejected; non-finite or singular
 // information (reciprocal condition of S below min_rcond); no convergence within
 // max_iterations.
 #include <Eigen/Core>
-
 #include <string>
 #include <vector>
 
@@ -34,24 +40,26 @@
 namespace nav::vision {
 
 struct TwoViewRefinementOptions {
-  double pixel_sigma_px = 0.5;      ///< Isotropic pixel noise of every feature, each axis.
+  double pixel_sigma_px = 0.5;         ///< Isotropic pixel noise of every feature, each axis.
   double huber_threshold_sigma = 3.0;  ///< Huber kink in units of sigma (per residual pair).
   int max_iterations = 50;
-  double function_tolerance = 1e-10;   ///< Stop when relative cost decrease is below.
-  double parameter_tolerance = 1e-10;  ///< Stop when the step norm is below (radians/units).
-  int min_points = 8;                  ///< Fewest usable matches.
-  double max_fraction_behind = 0.5;    ///< Larger fraction of points behind a camera fails.
-  double min_parallax_deg = 0.25;      ///< Median triangulation angle below this fails.
-  double min_rcond = 1e-12;            ///< Smallest reciprocal condition of S.
+  double function_tolerance = 1e-10;        ///< Stop when relative cost decrease is below.
+  double parameter_tolerance = 1e-10;       ///< Stop when the step norm is below (radians/units).
+  double pose_step_tolerance_sigma = 1e-6;  ///< Stop when sqrt(dz^T S dz) is below.
+  int min_points = 8;                       ///< Fewest usable matches.
+  double max_fraction_behind = 0.5;         ///< Larger fraction of points behind a camera fails.
+  double max_fraction_outliers = 0.5;       ///< Larger fraction rejected as outliers fails.
+  double min_parallax_deg = 0.25;           ///< Median triangulation angle below this fails.
+  double min_rcond = 1e-12;                 ///< Smallest reciprocal condition of S.
 };
 
 /// Result of refine_two_view. Points, depths and pixel residuals are listed for the matches
 /// that were used (`used_matches`, indices into the caller's match list).
 struct TwoViewRefinement {
   bool converged = false;
-  std::string reason;                 ///< Why converged == false.
-  Vec5 z = Vec5::Zero();              ///< As nav::core::CameraRelativePoseModel measures it.
-  Mat5 covariance = Mat5::Identity(); ///< 5x5 covariance of z, points marginalised.
+  std::string reason;                  ///< Why converged == false.
+  Vec5 z = Vec5::Zero();               ///< As nav::core::CameraRelativePoseModel measures it.
+  Mat5 covariance = Mat5::Identity();  ///< 5x5 covariance of z, points marginalised.
   Eigen::Matrix3d R_i_j = Eigen::Matrix3d::Identity();
   Eigen::Vector3d t_i_j_unit = Eigen::Vector3d::UnitX();
   std::vector<int> used_matches;
@@ -62,7 +70,8 @@ struct TwoViewRefinement {
   double initial_rms_px = 0.0;
   double median_parallax_deg = 0.0;
   int iterations = 0;
-  int behind_camera = 0;                  ///< Matches dropped for negative depth.
+  int behind_camera = 0;      ///< Matches dropped for negative depth.
+  int rejected_outliers = 0;  ///< Matches dropped beyond the Huber kink.
 };
 
 /// Refinement from pixel correspondences (undistorted pixels) and an initial pose.
@@ -77,8 +86,7 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
 /// Refinement of an essential-matrix estimate: the matches are estimate.inliers of `matches`
 /// (used_matches then index `matches.matches`). Fails when !estimate.ok.
 TwoViewRefinement refine_two_view(const ImageFeatures& i, const ImageFeatures& j,
-                                  const PutativeMatches& matches,
-                                  const EssentialEstimate& estimate,
+                                  const PutativeMatches& matches, const EssentialEstimate& estimate,
                                   const CameraIntrinsics& camera,
                                   const TwoViewRefinementOptions& options);
 
