@@ -229,8 +229,10 @@ LmOutcome levenberg_marquardt(Vec5& z, std::vector<Eigen::Vector3d>& X,
   return out;
 }
 
-TwoViewRefinement fail(TwoViewRefinement out, const std::string& reason) {
+TwoViewRefinement fail(TwoViewRefinement out, const std::string& reason,
+                       RegistrationFailure failure = RegistrationFailure::kRefinementFailed) {
   out.converged = false;
+  out.failure = failure;
   out.reason = "two-view refinement: " + reason;
   return out;
 }
@@ -276,7 +278,7 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
   const int n_in = static_cast<int>(u_i_px.size());
   if (n_in < opt.min_points) {
     why << n_in << " matches, fewer than the " << opt.min_points << " needed";
-    return fail(out, why.str());
+    return fail(out, why.str(), RegistrationFailure::kTooFewInliers);
   }
   Vec5 z;
   try {
@@ -334,7 +336,7 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
   if (static_cast<int>(X.size()) < opt.min_points) {
     why << X.size() << " matches in front of both cameras, fewer than the " << opt.min_points
         << " needed";
-    return fail(out, why.str());
+    return fail(out, why.str(), RegistrationFailure::kTooFewInliers);
   }
 
   // Robust LM, then the matches whose residual in either image exceeds the Huber kink are
@@ -371,7 +373,7 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
         static_cast<int>(keep.size()) < opt.min_points) {
       why << out.rejected_outliers << " of " << n_front << " matches rejected as outliers ("
           << keep.size() << " left after " << round + 1 << " rounds)";
-      return fail(out, why.str());
+      return fail(out, why.str(), RegistrationFailure::kTooFewInliers);
     }
     std::vector<Eigen::Vector3d> X_keep;
     std::vector<Eigen::Vector2d> ui_keep, uj_keep;
@@ -437,7 +439,8 @@ TwoViewRefinement refine_two_view(const ImageFeatures& i, const ImageFeatures& j
                                   const CameraIntrinsics& camera,
                                   const TwoViewRefinementOptions& options) {
   if (!estimate.ok) {
-    return fail(TwoViewRefinement{}, "essential-matrix estimate not usable: " + estimate.reason);
+    return fail(TwoViewRefinement{}, "essential-matrix estimate not usable: " + estimate.reason,
+                RegistrationFailure::kEssentialFailed);
   }
   std::vector<Eigen::Vector2d> u_i, u_j;
   std::vector<int> index;

@@ -57,7 +57,10 @@ struct TwoViewRefinementOptions {
 /// that were used (`used_matches`, indices into the caller's match list).
 struct TwoViewRefinement {
   bool converged = false;
-  std::string reason;                  ///< Why converged == false.
+  std::string reason;  ///< Why converged == false.
+  /// Failure class when !converged: kTooFewInliers when too few usable matches remain
+  /// (including after outlier rejection), otherwise kRefinementFailed.
+  RegistrationFailure failure = RegistrationFailure::kOk;
   Vec5 z = Vec5::Zero();               ///< As nav::core::CameraRelativePoseModel measures it.
   Mat5 covariance = Mat5::Identity();  ///< 5x5 covariance of z, points marginalised.
   Eigen::Matrix3d R_i_j = Eigen::Matrix3d::Identity();
