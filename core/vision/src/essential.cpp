@@ -317,13 +317,32 @@ EssentialEstimate estimate_essential(const ImageFeatures& features_i,
     return out;
   }
   Candidate polished = *chosen;
-  if (options.polish_iterations > 0) {
+  for (int round = 0; round < options.polish_rounds && options.polish_iterations > 0; ++round) {
     std::vector<Eigen::Vector2d> pi_in, pj_in;
     for (int k : out.inliers) {
       pi_in.push_back(xi[static_cast<std::size_t>(k)]);
       pj_in.push_back(xj[static_cast<std::size_t>(k)]);
     }
     polish_sampson(pi_in, pj_in, options.polish_iterations, &polished.R, &polished.t);
+    // Re-select the inliers among all matches at k robust sigmas of the polished model
+    // (sigma = 1.4826 median |d| over the current inliers, floored at the pixel noise floor).
+    const Eigen::Matrix3d E = core::skew(polished.t) * polished.R;
+    std::vector<double> d_in;
+    for (int k : out.inliers) {
+      d_in.push_back(std::abs(sampson_distance(E, xi[static_cast<std::size_t>(k)], xj[static_cast<std::size_t>(k)])));
+    }
+    auto mid = d_in.begin() + static_cast<std::ptrdiff_t>(d_in.size() / 2);
+    std::nth_element(d_in.begin(), mid, d_in.end());
+    const double sigma = std::max(1.4826 * *mid, options.min_sigma_px / focal);
+    std::vector<int> reselected;
+    for (int k = 0; k < n; ++k) {
+      const auto sk = static_cast<std::size_t>(k);
+      if (std::abs(sampson_distance(E, xi[sk], xj[sk])) <= options.inlier_k_sigma * sigma) {
+        reselected.push_back(k);
+      }
+    }
+    if (reselected.size() < 5) break;
+    out.inliers = std::move(reselected);
   }
   chosen = &polished;
   // Keep only the inliers in front of both cameras under the chosen pose.

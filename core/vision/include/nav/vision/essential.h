@@ -18,6 +18,10 @@
 // The chosen pose is polished on the inliers by Gauss-Newton on the Sampson error (first-order
 // geometric error; Hartley & Zisserman, 2nd ed., section 11.4.3), parametrised minimally as
 // R <- R exp([w]x), t <- normalise(t + B b) with B a basis of t's tangent plane (5 DOF).
+// After each polish the inliers are re-selected among all putative matches at inlier_k_sigma
+// robust standard deviations of the Sampson error, so that a LMedS model fitted to a biased
+// minimal sample does not keep its biased inlier set (as in locally optimised RANSAC: Chum,
+// Matas & Kittler, DAGM 2003).
 // A pair with too little parallax (pure rotation, or baseline negligible against the scene
 // depth) has no defined E and fails with a reason.
 
@@ -43,6 +47,9 @@ struct EssentialOptions {
                                   ///< the mean focal length): pure rotation.
   bool planar_candidates = true;    ///< Add the homography decompositions as candidates.
   int polish_iterations = 10;       ///< Sampson-error Gauss-Newton steps on the inliers (0: off).
+  int polish_rounds = 3;            ///< Polish, re-select inliers, repeat.
+  double inlier_k_sigma = 2.5;      ///< Re-selection gate in robust sigmas of the Sampson error.
+  double min_sigma_px = 0.2;        ///< Floor of the robust sigma, pixels.
 };
 
 /// The 5-DOF measurement z = [azimuth, elevation, roll, pitch, heading] of a rotation R_i_j and
