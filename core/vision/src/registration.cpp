@@ -93,6 +93,15 @@ RegistrationResult Registration::register_pair(const ImageFeatures& i, const Ima
     return finish(failed(result, RegistrationFailure::kEssentialFailed, d.essential.reason));
   }
   result.inliers = static_cast<int>(d.essential.inliers.size());
+  if (result.inliers < options_.min_inliers ||
+      result.inliers < options_.min_inlier_fraction * result.putative_matches) {
+    return finish(failed(result, RegistrationFailure::kTooFewInliers,
+                         std::to_string(result.inliers) + " essential-matrix inliers of " +
+                             std::to_string(result.putative_matches) +
+                             " putative matches; at least " + std::to_string(options_.min_inliers) +
+                             " and a fraction " + std::to_string(options_.min_inlier_fraction) +
+                             " needed"));
+  }
   result.z = measurement_from_pose(d.essential.R_i_j, d.essential.t_i_j_unit);
   result.success = true;
   return finish(result);

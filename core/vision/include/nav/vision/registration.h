@@ -34,6 +34,10 @@ struct RegistrationOptions {
   MatchingOptions matching;
   EssentialOptions essential;
   int min_features = 8;  ///< Fewer features in either image: kTooFewFeatures.
+  int min_inliers = 12;  ///< Fewer essential-matrix inliers: kTooFewInliers.
+  /// Smallest inlier fraction of the putative matches: below it the "model" is most likely
+  /// fitted to chance matches of a non-overlapping pair (LMedS assumes a majority of inliers).
+  double min_inlier_fraction = 0.3;
 };
 
 /// Wall time of each stage of one register_pair call, milliseconds.
