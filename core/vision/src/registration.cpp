@@ -37,6 +37,12 @@ core::Status Registration::try_features(const cv::Mat& image, ImageFeatures* out
   return extract_features(grey, camera_, ideal, options_.features, out);
 }
 
+core::Status Registration::try_preprocess(const cv::Mat& image, cv::Mat* out_8u,
+                                          const IlluminationMean* mean) const {
+  if (core::Status s = validate(camera_); !s.ok()) return s;
+  return preprocessor_.run(image, out_8u, mean);
+}
+
 ImageFeatures Registration::features(const cv::Mat& image) const {
   ImageFeatures out;
   if (core::Status s = try_features(image, &out); !s.ok()) {

@@ -69,6 +69,10 @@ class Registration {
   core::Status try_features(const cv::Mat& image, ImageFeatures* out,
                             const IlluminationMean* mean = nullptr) const;
 
+  /// The 8-bit preprocessed image the features are detected on (for drawing).
+  core::Status try_preprocess(const cv::Mat& image, cv::Mat* out_8u,
+                              const IlluminationMean* mean = nullptr) const;
+
   /// Registers image j against image i; prior == nullptr: no pose prior (unconstrained search).
   RegistrationResult register_pair(const ImageFeatures& i, const ImageFeatures& j,
                                    const RelativePosePrior* prior) const;
