@@ -116,8 +116,8 @@ vision::RelativePosePrior read_prior(const std::string& path) {
   vision::RelativePosePrior prior;
   try {
     const auto x = j.at("x_i_j").get<std::vector<double>>();
-    const auto p = j.at("covariance").get<std::vector<double>>();
     if (x.size() != 6) throw CommandError("register: " + path + ": x_i_j needs 6 numbers");
+    const auto p = j.at("covariance").get<std::vector<double>>();
     if (p.size() != 36) throw CommandError("register: " + path + ": covariance needs 36 numbers");
     for (int r = 0; r < 6; ++r) {
       prior.x_i_j[r] = x[static_cast<std::size_t>(r)];
