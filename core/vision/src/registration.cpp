@@ -1,0 +1,116 @@
+#include "nav/vision/registration.h"
+
+#include <chrono>
+#include <stdexcept>
+#include <string>
+
+#include "nav/vision/camera_model.h"
+
+namespace nav::vision {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+RegistrationResult failed(RegistrationResult r, RegistrationFailure failure, std::string reason) {
+  r.success = false;
+  r.failure = failure;
+  r.reason = std::move(reason);
+  return r;
+}
+
+}  // namespace
+
+Registration::Registration(const CameraIntrinsics& camera, const RegistrationOptions& options)
+    : camera_(camera), options_(options), preprocessor_(camera, options.preprocess) {}
+
+core::Status Registration::try_features(const cv::Mat& image, ImageFeatures* out,
+                                        const IlluminationMean* mean) const {
+  if (core::Status s = validate(camera_); !s.ok()) return s;
+  cv::Mat grey;
+  if (core::Status s = preprocessor_.run(image, &grey, mean); !s.ok()) return s;
+  const bool ideal = options_.preprocess.undistort || !has_distortion(camera_);
+  return extract_features(grey, camera_, ideal, options_.features, out);
+}
+
+core::Status Registration::try_preprocess(const cv::Mat& image, cv::Mat* out_8u,
+                                          const IlluminationMean* mean) const {
+  if (core::Status s = validate(camera_); !s.ok()) return s;
+  return preprocessor_.run(image, out_8u, mean);
+}
+
+ImageFeatures Registration::features(const cv::Mat& image) const {
+  ImageFeatures out;
+  if (core::Status s = try_features(image, &out); !s.ok()) {
+    throw std::invalid_argument("Registration::features: " + s.message());
+  }
+  return out;
+}
+
+RegistrationResult Registration::register_pair(const ImageFeatures& i, const ImageFeatures& j,
+                                               const RelativePosePrior* prior) const {
+  return register_pair(i, j, prior, nullptr);
+}
+
+RegistrationResult Registration::register_pair(const ImageFeatures& i, const ImageFeatures& j,
+                                               const RelativePosePrior* prior,
+                                               RegistrationDiagnostics* diagnostics) const {
+  RegistrationDiagnostics local;
+  RegistrationDiagnostics& d = diagnostics != nullptr ? *diagnostics : local;
+  d = RegistrationDiagnostics{};
+  const auto start = Clock::now();
+  RegistrationResult result;
+  auto finish = [&](RegistrationResult r) {
+    d.timings.total_ms = ms_since(start);
+    return r;
+  };
+
+  if (core::Status s = validate(camera_); !s.ok()) {
+    return finish(failed(result, RegistrationFailure::kBadImage, s.message()));
+  }
+  const int min_features = options_.min_features;
+  if (static_cast<int>(i.size()) < min_features || static_cast<int>(j.size()) < min_features) {
+    return finish(failed(result, RegistrationFailure::kTooFewFeatures,
+                         "image i has " + std::to_string(i.size()) + " features, image j " +
+                             std::to_string(j.size()) + "; at least " +
+                             std::to_string(min_features) + " needed in each"));
+  }
+
+  auto t0 = Clock::now();
+  d.matches = match_unconstrained(i, j, options_.matching);
+  d.timings.matching_ms = ms_since(t0);
+  result.putative_matches = static_cast<int>(d.matches.matches.size());
+  result.descriptor_comparisons = d.matches.descriptor_comparisons;
+  if (result.putative_matches < options_.essential.min_matches) {
+    return finish(failed(result, RegistrationFailure::kTooFewMatches,
+                         std::to_string(result.putative_matches) +
+                             " putative matches (no overlap?), at least " +
+                             std::to_string(options_.essential.min_matches) + " needed"));
+  }
+
+  t0 = Clock::now();
+  d.essential = estimate_essential(i, j, d.matches, camera_, options_.essential, prior);
+  d.timings.essential_ms = ms_since(t0);
+  if (!d.essential.ok) {
+    return finish(failed(result, RegistrationFailure::kEssentialFailed, d.essential.reason));
+  }
+  result.inliers = static_cast<int>(d.essential.inliers.size());
+  if (result.inliers < options_.min_inliers ||
+      result.inliers < options_.min_inlier_fraction * result.putative_matches) {
+    return finish(failed(result, RegistrationFailure::kTooFewInliers,
+                         std::to_string(result.inliers) + " essential-matrix inliers of " +
+                             std::to_string(result.putative_matches) +
+                             " putative matches; at least " + std::to_string(options_.min_inliers) +
+                             " and a fraction " + std::to_string(options_.min_inlier_fraction) +
+                             " needed"));
+  }
+  result.z = measurement_from_pose(d.essential.R_i_j, d.essential.t_i_j_unit);
+  result.success = true;
+  return finish(result);
+}
+
+}  // namespace nav::vision
