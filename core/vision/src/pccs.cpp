@@ -319,24 +319,4 @@ PutativeMatches match_pose_constrained(const ImageFeatures& i, const ImageFeatur
   return out;
 }
 
-PutativeMatches match_exhaustive(const ImageFeatures& i, const ImageFeatures& j, double ratio,
-                                 bool mutual) {
-  require_descriptors(i, "i");
-  require_descriptors(j, "j");
-  PutativeMatches out;
-  if (i.size() == 0 || j.size() == 0) return out;
-  if (i.descriptors.cols != j.descriptors.cols) {
-    throw std::invalid_argument("feature matching: descriptor widths differ (" +
-                                std::to_string(i.descriptors.cols) + " and " +
-                                std::to_string(j.descriptors.cols) + ")");
-  }
-  MatchAccumulator acc(i.size(), j.size());
-  for (int a = 0; a < static_cast<int>(i.size()); ++a)
-    for (int b = 0; b < static_cast<int>(j.size()); ++b)
-      acc.add(a, b, distance2(i.descriptors, a, j.descriptors, b));
-  out.descriptor_comparisons = i.size() * j.size();
-  out.matches = acc.finish(ratio, mutual);
-  return out;
-}
-
 }  // namespace nav::vision

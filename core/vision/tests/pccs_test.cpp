@@ -19,6 +19,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "nav/vision/matching.h"
 #include "synthetic_two_view.h"
 
 namespace nav::vision {
@@ -196,7 +197,7 @@ TEST(Pccs, FewerComparisonsThanExhaustiveAndFindsTheTrueMatches) {
       test::make_scene(rng, truth, 1500, kDepthM, kDepthSigmaM, kPixelSigmaPx);
   const FeaturePair f = make_features(rng, scene, 1500, 1.0, 0.15, 500);
   const PutativeMatches pccs = match_pose_constrained(f.i, f.j, scene.camera, prior, PccsOptions{});
-  const PutativeMatches full = match_exhaustive(f.i, f.j, 0.8, true);
+  const PutativeMatches full = match_unconstrained(f.i, f.j, MatchingOptions{});
   const Score sp = score(pccs, f), sf = score(full, f);
   std::cout << "distinct texture: PCCS " << pccs.descriptor_comparisons << " comparisons, "
             << sp.correct << " correct / " << sp.wrong << " wrong; exhaustive "
@@ -220,7 +221,7 @@ TEST(Pccs, RepetitiveTextureMatchedInsideRegionsOnly) {
       test::make_scene(rng, truth, 1500, kDepthM, kDepthSigmaM, kPixelSigmaPx);
   const FeaturePair f = make_features(rng, scene, 60, 0.05, 0.06, 500);
   const PutativeMatches pccs = match_pose_constrained(f.i, f.j, scene.camera, prior, PccsOptions{});
-  const PutativeMatches full = match_exhaustive(f.i, f.j, 0.8, true);
+  const PutativeMatches full = match_unconstrained(f.i, f.j, MatchingOptions{});
   const Score sp = score(pccs, f), sf = score(full, f);
   std::cout << "repetitive texture: PCCS " << sp.correct << " correct / " << sp.wrong
             << " wrong; exhaustive " << sf.correct << " correct / " << sf.wrong << " wrong ("

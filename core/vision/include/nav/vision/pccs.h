@@ -29,7 +29,8 @@
 // whose region contains u_j. Image j's points are bucketed in a uniform grid so a region only
 // visits the cells its sub-segments' bounding boxes cover.
 //
-// Pure function of its inputs; thread-safe.
+// Pure function of its inputs; thread-safe. Without a prior: matching.h (match_unconstrained),
+// the same ratio and mutual tests over every pair.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <vector>
@@ -85,10 +86,5 @@ SearchRegion search_region(const Eigen::Vector2d& u_i_px, const CameraIntrinsics
 PutativeMatches match_pose_constrained(const ImageFeatures& i, const ImageFeatures& j,
                                        const CameraIntrinsics& camera,
                                        const RelativePosePrior& prior, const PccsOptions& options);
-
-/// Reference without a prior: every pair compared (|i| * |j| comparisons), the same ratio test
-/// and mutual check. For measuring PCCS against and for pairs without a prior.
-PutativeMatches match_exhaustive(const ImageFeatures& i, const ImageFeatures& j, double ratio,
-                                 bool mutual);
 
 }  // namespace nav::vision
