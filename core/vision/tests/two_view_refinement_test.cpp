@@ -69,6 +69,9 @@ TEST(TwoViewRefinement, RecoversZWithinItsCovariance) {
   // Residual degrees of freedom: 4n - 3n - 5 = n - 5 of 4n components.
   const double expected_rms = kSigmaPx * std::sqrt((150.0 - 5.0) / (4.0 * 150.0));
   EXPECT_NEAR(r.reprojection_rms_px, expected_rms, 0.2 * expected_rms);
+  EXPECT_NEAR(r.residual_sigma_px, kSigmaPx, 0.15 * kSigmaPx);
+  // Parallax of a 0.74 m baseline at 3.5 m: ~12 deg, ~200 px at f = 1000 px.
+  EXPECT_GT(r.median_parallax_px, 150.0);
   EXPECT_EQ(r.used_matches.size(), 150u);
   EXPECT_EQ(r.behind_camera, 0);
   // Depths in baseline units: truth / |t|.
@@ -217,6 +220,26 @@ TEST(TwoViewRefinement, PureRotationFails) {
                                               Eigen::Vector3d(1.0, 0.3, 0.0), options());
   EXPECT_FALSE(r.converged);
   EXPECT_NE(r.reason.find("pure rotation"), std::string::npos) << r.reason;
+}
+
+TEST(TwoViewRefinement, ShortBaselineRegistersNoiseLevelParallaxFails) {
+  // 5 cm at 3.5 m (~14 px of parallax) is a usable, if weak, baseline: z within its
+  // covariance. 2 mm (~0.6 px, near the 0.5 px noise) cannot be told from a pure rotation.
+  std::mt19937 rng(9);
+  Vec6 x = test::default_x_i_j();
+  x.head<3>() = x.head<3>().normalized() * 0.05;
+  const test::TwoViewScene s = test::make_scene(rng, x, 150, 3.5, 0.3, kSigmaPx);
+  const TwoViewRefinement r = refine_two_view(s.u_i, s.u_j, s.camera, core::pose_rotation(x),
+                                              core::pose_translation(x), options());
+  ASSERT_TRUE(r.converged) << r.reason;
+  EXPECT_LT(nees(r, z_from_relative_pose(x)), 20.5);
+  x.head<3>() = x.head<3>().normalized() * 0.002;
+  const test::TwoViewScene tiny = test::make_scene(rng, x, 150, 3.5, 0.3, kSigmaPx);
+  const TwoViewRefinement t = refine_two_view(tiny.u_i, tiny.u_j, tiny.camera,
+                                              core::pose_rotation(x), core::pose_translation(x),
+                                              options());
+  EXPECT_FALSE(t.converged);
+  EXPECT_NE(t.reason.find("pure rotation"), std::string::npos) << t.reason;
 }
 
 TEST(TwoViewRefinement, PointsBehindTheCamerasFail) {

@@ -27,7 +27,8 @@
 //
 // Failures (converged == false, `reason` says why and with which numbers): fewer than
 // min_points usable matches; too many matches triangulating behind either camera; median
-// parallax below min_parallax_deg (pure rotation / zero baseline); more than
+// derotated parallax below min_parallax_sigma noise sigmas (pure rotation / zero baseline,
+// before and after the solve); more than
 // max_fraction_outliers rejected; non-finite or singular
 // information (reciprocal condition of S below min_rcond); no convergence within
 // max_iterations.
@@ -43,14 +44,17 @@ struct TwoViewRefinementOptions {
   double pixel_sigma_px = 0.5;         ///< Isotropic pixel noise of every feature, each axis.
   double huber_threshold_sigma = 3.0;  ///< Huber kink in units of sigma (per residual pair).
   int max_iterations = 50;
-  double function_tolerance = 1e-10;        ///< Stop when relative cost decrease is below.
+  double function_tolerance = 1e-8;         ///< Stop when relative cost decrease is below.
   double parameter_tolerance = 1e-10;       ///< Stop when the step norm is below (radians/units).
-  double pose_step_tolerance_sigma = 1e-6;  ///< Stop when sqrt(dz^T S dz) is below.
+  double pose_step_tolerance_sigma = 1e-3;  ///< Stop when sqrt(dz^T S dz) is below.
   int min_points = 8;                       ///< Fewest usable matches.
   double max_fraction_behind = 0.5;         ///< Larger fraction of points behind a camera fails.
   double max_fraction_outliers = 0.5;       ///< Larger fraction rejected as outliers fails.
-  double min_parallax_deg = 0.25;           ///< Median triangulation angle below this fails.
-  double min_rcond = 1e-12;                 ///< Smallest reciprocal condition of S.
+  /// Median derotated parallax (ray angle x mean focal length) below min_parallax_sigma x
+  /// pixel_sigma_px fails as pure rotation: under a pure rotation the derotated disparity of a
+  /// match is noise, Rayleigh with scale sqrt(2) sigma and median 1.67 sigma.
+  double min_parallax_sigma = 3.0;
+  double min_rcond = 1e-12;  ///< Smallest reciprocal condition of S.
 };
 
 /// Result of refine_two_view. Points, depths and pixel residuals are listed for the matches
@@ -71,7 +75,10 @@ struct TwoViewRefinement {
   std::vector<double> depths_j;           ///< z coordinate of X_k in camera j, baseline units.
   double reprojection_rms_px = 0.0;       ///< RMS over all 4 * n residual components.
   double initial_rms_px = 0.0;
-  double median_parallax_deg = 0.0;
+  double median_parallax_px = 0.0;  ///< Median triangulation angle x focal length.
+  /// A-posteriori pixel noise sqrt(RSS / (n - 5)) (reported; the covariance uses
+  /// pixel_sigma_px). Much smaller or larger than pixel_sigma_px: the noise model is off.
+  double residual_sigma_px = 0.0;
   int iterations = 0;
   int behind_camera = 0;      ///< Matches dropped for negative depth.
   int rejected_outliers = 0;  ///< Matches dropped beyond the Huber kink.
