@@ -1,5 +1,6 @@
 #include "nav/vision/registration.h"
 
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
 #include <string>
@@ -25,10 +26,13 @@ RegistrationResult failed(RegistrationResult r, RegistrationFailure failure, std
 }
 
 /// The inliers whose parallax after removing the rotation, |x_i - pi(R x_j)| in pixels at the
-/// mean focal length, is at least min_px.
+/// mean focal length, is at least min_px, and whose triangulated depths are positive and below
+/// the depth at which min_px of parallax would be reached.
 std::vector<int> with_parallax(const ImageFeatures& i, const ImageFeatures& j,
                                const PutativeMatches& matches, const EssentialEstimate& e,
                                const CameraIntrinsics& camera, double min_px) {
+  // Depth (baselines) at which min_px of parallax is reached at the mean focal length.
+  const double max_depth = 0.5 * (camera.fx_px + camera.fy_px) / std::max(min_px, 1e-3);
   std::vector<int> kept;
   const double focal = 0.5 * (camera.fx_px + camera.fy_px);
   for (int k : e.inliers) {
@@ -37,7 +41,13 @@ std::vector<int> with_parallax(const ImageFeatures& i, const ImageFeatures& j,
     const Eigen::Vector2d x_j = normalised_from_pixel(camera, j.points_px[static_cast<std::size_t>(m.index_j)]);
     const Eigen::Vector3d r = e.R_i_j * Eigen::Vector3d(x_j.x(), x_j.y(), 1.0);
     if (r.z() <= 0.0) continue;
-    if ((x_i - r.head<2>() / r.z()).norm() * focal >= min_px) kept.push_back(k);
+    if ((x_i - r.head<2>() / r.z()).norm() * focal < min_px) continue;
+    // The parallax must also lie along the epipolar direction: a finite depth in front of both
+    // cameras (a displacement across the epipolar line triangulates near infinity).
+    double depth_i = 0.0, depth_j = 0.0;
+    if (!triangulate_depths(e.R_i_j, e.t_i_j_unit, x_i, x_j, &depth_i, &depth_j)) continue;
+    if (depth_i <= 0.0 || depth_j <= 0.0 || depth_i > max_depth || depth_j > max_depth) continue;
+    kept.push_back(k);
   }
   return kept;
 }
