@@ -13,6 +13,12 @@
 #include <sstream>
 #include <string>
 
+#include <Eigen/Geometry>
+#include <cstdio>
+#include <vector>
+
+#include "nav/core/geometry/rotation.h"
+#include "nav/core/models/binary_models.h"
 #include "nav/testing/data.h"
 
 namespace {
@@ -147,6 +153,93 @@ TEST(NavtoolRegister, BadInputGivesAClearErrorAndExitStatus1) {
   r = run_navtool(quoted(skerki) + " " + quoted(skerki) + camera);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("calibration is for 384x288"), std::string::npos) << r.err;
+}
+
+/// Rows of a simulated dive's images.csv: frame id and the vehicle pose [x y z r p h] (NED, rad)
+/// with the altitude.
+struct ImageRow {
+  int frame = 0;
+  nav::core::Vec6 pose = nav::core::Vec6::Zero();
+  double altitude_m = 0.0;
+};
+
+std::vector<ImageRow> read_images_csv(const fs::path& path) {
+  std::vector<ImageRow> rows;
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    std::string cell;
+    std::vector<double> v;
+    while (std::getline(ss, cell, ',')) v.push_back(std::stod(cell));
+    if (v.size() < 9) continue;
+    ImageRow row;
+    row.frame = static_cast<int>(v[0]);
+    row.pose << v[2], v[3], v[4], v[5], v[6], v[7];
+    row.altitude_m = v[8];
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+TEST(NavtoolRegister, SimulatorRenderedMono12PairsWithTruthPriorMatchTheTruth) {
+  // A short simulated dive with rendered 12-bit frames (config/sim.yaml's camera: fx = fy =
+  // 1000, 1280x1024 Mono12, mount [1 0 0.5] m, heading 90 deg), registered with a prior at the
+  // true relative camera pose: the pose-constrained search compares far fewer descriptors than
+  // |i| x |j| and the measured rotation matches the truth.
+  const fs::path dive = temp_dir() / "dive";
+  fs::remove_all(dive);
+  std::ostringstream simulate;
+  simulate << '\'' << NAVTOOL_PATH << "' simulate --out '" << dive.string()
+           << "' --images 6 --render-images --config '" << NAV_SOURCE_DIR
+           << "/config/sim.yaml' >/dev/null 2>&1";
+  ASSERT_EQ(std::system(simulate.str().c_str()), 0);
+  const std::vector<ImageRow> rows = read_images_csv(dive / "images.csv");
+  ASSERT_EQ(rows.size(), 6u);
+  const fs::path camera = write_file("sim_camera.yaml",
+                                     "camera:\n  fx: 1000.0\n  fy: 1000.0\n  cx: 640.0\n"
+                                     "  cy: 512.0\n  distortion: [0, 0, 0, 0, 0]\n"
+                                     "  pixel_format: mono12\n  width: 1280\n  height: 1024\n");
+  nav::core::CameraRelativePoseModel model;
+  model.x_body_camera << 1.0, 0.0, 0.5, 0.0, 0.0, M_PI / 2.0;
+  int registered = 0;
+  for (std::size_t a = 0; a + 1 < rows.size(); ++a) {
+    const nav::core::Vec6 x_i_j = model.camera_relative_pose(rows[a].pose, rows[a + 1].pose);
+    std::ostringstream prior;
+    prior << "{\"x_i_j\": [";
+    for (int k = 0; k < 6; ++k) prior << x_i_j[k] << (k < 5 ? ", " : "");
+    prior << "], \"covariance\": [";
+    for (int k = 0; k < 36; ++k) {
+      prior << (k % 7 != 0 ? 0.0 : (k < 21 ? 0.1 * 0.1 : 0.01 * 0.01)) << (k < 35 ? ", " : "");
+    }
+    prior << "], \"scene_depth_m\": " << rows[a].altitude_m - 0.5
+          << ", \"scene_depth_sigma_m\": 0.5}";
+    char name_i[32], name_j[32];
+    std::snprintf(name_i, sizeof name_i, "%06d.png", rows[a].frame);
+    std::snprintf(name_j, sizeof name_j, "%06d.png", rows[a + 1].frame);
+    const RunResult r = run_navtool(quoted(dive / "images" / name_i) + " " +
+                                    quoted(dive / "images" / name_j) + " --camera " +
+                                    quoted(camera) + " --json --prior " +
+                                    quoted(write_file("sim_prior.json", prior.str())));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json j = json::parse(r.out);
+    const auto features = j.at("features").get<std::vector<double>>();
+    std::printf("frames %d-%d: %s %s inliers %d putative %d comparisons %.0f of %.0f, chi2 %.2f\n",
+                rows[a].frame, rows[a + 1].frame, j.at("success").get<bool>() ? "registered" : "failed:",
+                j.at("reason").get<std::string>().c_str(), j.at("inliers").get<int>(),
+                j.at("putative_matches").get<int>(), j.at("descriptor_comparisons").get<double>(),
+                features[0] * features[1], j.at("prior_chi2").get<double>());
+    EXPECT_LT(j.at("descriptor_comparisons").get<double>(), 0.5 * features[0] * features[1]);
+    if (!j.at("success").get<bool>()) continue;
+    ++registered;
+    const auto z = j.at("measurement").get<std::vector<double>>();
+    const Eigen::Matrix3d R_measured = nav::core::rotation_from_euler({z[2], z[3], z[4]});
+    const Eigen::Matrix3d R_true = nav::core::rotation_from_euler(x_i_j.tail<3>());
+    EXPECT_LT(Eigen::AngleAxisd(R_measured.transpose() * R_true).angle() * 180.0 / M_PI, 1.0)
+        << "frames " << rows[a].frame << "-" << rows[a + 1].frame;
+  }
+  EXPECT_GE(registered, 3);
 }
 
 }  // namespace

@@ -1,9 +1,11 @@
 #include "nav/vision/draw.h"
 
+#include <Eigen/Eigenvalues>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "nav/vision/camera_model.h"
 
@@ -52,6 +54,41 @@ bool epipolar_segment(const Eigen::Matrix3d& E, const CameraIntrinsics& camera,
 }
 
 }  // namespace
+
+std::vector<SearchBand> search_bands(const ImageFeatures& features_i,
+                                     const RegistrationDiagnostics& diagnostics,
+                                     const CameraIntrinsics& camera,
+                                     const RelativePosePrior* prior, const PccsOptions& options,
+                                     int count) {
+  std::vector<SearchBand> bands;
+  if (prior == nullptr || count <= 0 || features_i.size() == 0) return bands;
+  std::vector<int> candidates;
+  for (int k : diagnostics.essential.inliers) {
+    candidates.push_back(diagnostics.matches.matches[static_cast<std::size_t>(k)].index_i);
+  }
+  if (candidates.empty()) {
+    for (std::size_t k = 0; k < features_i.size(); ++k) candidates.push_back(static_cast<int>(k));
+  }
+  const int n = std::min<int>(count, static_cast<int>(candidates.size()));
+  for (int s = 0; s < n; ++s) {
+    const int f = candidates[static_cast<std::size_t>(s) * candidates.size() / static_cast<std::size_t>(n)];
+    SearchRegion region;
+    try {
+      region = search_region(features_i.points_px[static_cast<std::size_t>(f)], camera, *prior, options);
+    } catch (const std::invalid_argument&) {
+      return bands;  // An unusable prior has no bands to draw.
+    }
+    SearchBand band;  // Empty when the region is empty: keeps the colour order of the sample.
+    band.feature_i = f;
+    band.centres_px = region.centres_px;
+    for (const Eigen::Matrix2d& S : region.covariances_px2) {
+      const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S).eigenvalues()[1];
+      band.half_widths_px.push_back(std::sqrt(region.gate_chi2 * std::max(0.0, largest)));
+    }
+    bands.push_back(std::move(band));
+  }
+  return bands;
+}
 
 cv::Mat draw_registration(const cv::Mat& image_i_8u, const cv::Mat& image_j_8u,
                           const ImageFeatures& features_i, const ImageFeatures& features_j,

@@ -8,10 +8,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <stdexcept>
 #include <string>
 
 #include "nav/core/geometry/rotation.h"
 #include "nav/vision/camera_model.h"
+#include "nav/vision/relative_pose_5dof.h"
 
 namespace nav::vision {
 
@@ -163,38 +166,6 @@ int polish_sampson(const std::vector<Eigen::Vector2d>& x_i, const std::vector<Ei
   return accepted;
 }
 
-Vec5 measurement_from_pose(const Eigen::Matrix3d& R_i_j, const Eigen::Vector3d& t_i_j) {
-  const Eigen::Vector3d rpy = core::euler_from_rotation(R_i_j);
-  const double rho = std::hypot(t_i_j.x(), t_i_j.y());
-  Vec5 z;
-  z << std::atan2(t_i_j.y(), t_i_j.x()), std::atan2(t_i_j.z(), rho), rpy.x(), rpy.y(), rpy.z();
-  return z;
-}
-
-bool predicted_measurement(const RelativePosePrior& prior, Vec5* z, Mat5* covariance) {
-  const double tx = prior.x_i_j[0], ty = prior.x_i_j[1], tz = prior.x_i_j[2];
-  const double rho2 = tx * tx + ty * ty;
-  const double rho = std::sqrt(rho2);
-  if (rho < 1e-9) return false;
-  const double r2 = rho2 + tz * tz;
-  *z << std::atan2(ty, tx), std::atan2(tz, rho), prior.x_i_j[3], prior.x_i_j[4], prior.x_i_j[5];
-  Eigen::Matrix<double, 5, 6> G = Eigen::Matrix<double, 5, 6>::Zero();
-  G(0, 0) = -ty / rho2;
-  G(0, 1) = tx / rho2;
-  G(1, 0) = -tx * tz / (rho * r2);
-  G(1, 1) = -ty * tz / (rho * r2);
-  G(1, 2) = rho / r2;
-  G.bottomRightCorner<3, 3>().setIdentity();
-  *covariance = G * prior.covariance * G.transpose();
-  return true;
-}
-
-double measurement_mahalanobis2(const Vec5& z, const Vec5& z_hat, const Mat5& S) {
-  Vec5 r = z - z_hat;
-  for (int k = 0; k < 5; ++k) r[k] = core::wrap_angle(r[k]);
-  return r.dot(S.ldlt().solve(r));
-}
-
 bool triangulate_depths(const Eigen::Matrix3d& R_i_j, const Eigen::Vector3d& t_i_j,
                         const Eigen::Vector2d& x_i, const Eigen::Vector2d& x_j, double* depth_i,
                         double* depth_j) {
@@ -295,16 +266,37 @@ EssentialEstimate estimate_essential(const ImageFeatures& features_i,
     out.reason = "essential: no decomposition puts the inliers in front of both cameras";
     return out;
   }
-  Vec5 z_hat;
-  Mat5 S;
-  const bool use_prior = prior != nullptr && predicted_measurement(*prior, &z_hat, &S);
+  // The prior's predicted measurement and covariance (relative_pose_5dof.h); none when the
+  // prior's baseline has no defined azimuth.
+  PredictedZ predicted;
+  bool use_prior = false;
+  if (prior != nullptr) {
+    try {
+      predicted = predict_z(*prior);
+      use_prior = true;
+    } catch (const std::domain_error&) {
+      use_prior = false;
+    }
+  }
+  const auto S = predicted.covariance.ldlt();
+  auto prior_distance2 = [&](const Candidate& c) {
+    const Vec5 r = z_minus(z_from_rotation_translation(c.R, c.t), predicted.z);
+    return r.dot(S.solve(r));
+  };
   const Candidate* chosen = nullptr;
   double chosen_key = 0.0;
   for (const Candidate& c : candidates) {
     if (c.in_front < options.ambiguity_ratio * best_count) continue;
     // Without a prior: most points in front. With a prior: nearest the prediction.
-    const double key = use_prior ? measurement_mahalanobis2(measurement_from_pose(c.R, c.t), z_hat, S)
-                                 : -static_cast<double>(c.in_front);
+    // A candidate whose baseline is along the optical axis has no azimuth: last resort only.
+    double key = -static_cast<double>(c.in_front);
+    if (use_prior) {
+      try {
+        key = prior_distance2(c);
+      } catch (const std::domain_error&) {
+        key = std::numeric_limits<double>::max();
+      }
+    }
     if (chosen == nullptr || key < chosen_key) {
       chosen = &c;
       chosen_key = key;

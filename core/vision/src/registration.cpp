@@ -1,8 +1,10 @@
 #include "nav/vision/registration.h"
 
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "nav/vision/camera_model.h"
 
@@ -21,6 +23,33 @@ RegistrationResult failed(RegistrationResult r, RegistrationFailure failure, std
   r.failure = failure;
   r.reason = std::move(reason);
   return r;
+}
+
+/// The inliers whose parallax after removing the rotation, |x_i - pi(R x_j)| in pixels at the
+/// mean focal length, is at least min_px, and whose triangulated depths are positive and below
+/// the depth at which min_px of parallax would be reached.
+std::vector<int> with_parallax(const ImageFeatures& i, const ImageFeatures& j,
+                               const PutativeMatches& matches, const EssentialEstimate& e,
+                               const CameraIntrinsics& camera, double min_px) {
+  // Depth (baselines) at which min_px of parallax is reached at the mean focal length.
+  const double max_depth = 0.5 * (camera.fx_px + camera.fy_px) / std::max(min_px, 1e-3);
+  std::vector<int> kept;
+  const double focal = 0.5 * (camera.fx_px + camera.fy_px);
+  for (int k : e.inliers) {
+    const Match& m = matches.matches[static_cast<std::size_t>(k)];
+    const Eigen::Vector2d x_i = normalised_from_pixel(camera, i.points_px[static_cast<std::size_t>(m.index_i)]);
+    const Eigen::Vector2d x_j = normalised_from_pixel(camera, j.points_px[static_cast<std::size_t>(m.index_j)]);
+    const Eigen::Vector3d r = e.R_i_j * Eigen::Vector3d(x_j.x(), x_j.y(), 1.0);
+    if (r.z() <= 0.0) continue;
+    if ((x_i - r.head<2>() / r.z()).norm() * focal < min_px) continue;
+    // The parallax must also lie along the epipolar direction: a finite depth in front of both
+    // cameras (a displacement across the epipolar line triangulates near infinity).
+    double depth_i = 0.0, depth_j = 0.0;
+    if (!triangulate_depths(e.R_i_j, e.t_i_j_unit, x_i, x_j, &depth_i, &depth_j)) continue;
+    if (depth_i <= 0.0 || depth_j <= 0.0 || depth_i > max_depth || depth_j > max_depth) continue;
+    kept.push_back(k);
+  }
+  return kept;
 }
 
 }  // namespace
@@ -81,7 +110,17 @@ RegistrationResult Registration::register_pair(const ImageFeatures& i, const Ima
   }
 
   auto t0 = Clock::now();
-  d.matches = match_unconstrained(i, j, options_.matching);
+  if (prior != nullptr) {
+    try {
+      d.matches = match_pose_constrained(i, j, camera_, *prior, options_.pccs);
+    } catch (const std::invalid_argument& e) {
+      d.timings.matching_ms = ms_since(t0);
+      return finish(failed(result, RegistrationFailure::kTooFewMatches,
+                           std::string("pose-constrained search: ") + e.what()));
+    }
+  } else {
+    d.matches = match_unconstrained(i, j, options_.matching);
+  }
   d.timings.matching_ms = ms_since(t0);
   result.putative_matches = static_cast<int>(d.matches.matches.size());
   result.descriptor_comparisons = d.matches.descriptor_comparisons;
@@ -108,8 +147,20 @@ RegistrationResult Registration::register_pair(const ImageFeatures& i, const Ima
                              " and a fraction " + std::to_string(options_.min_inlier_fraction) +
                              " needed"));
   }
-  result.z = measurement_from_pose(d.essential.R_i_j, d.essential.t_i_j_unit);
-  result.success = true;
+
+  t0 = Clock::now();
+  EssentialEstimate for_refinement = d.essential;
+  for_refinement.inliers = with_parallax(i, j, d.matches, d.essential, camera_,
+                                         options_.min_point_parallax_px);
+  d.refinement = refine_two_view(i, j, d.matches, for_refinement, camera_, options_.refinement);
+  d.timings.refinement_ms = ms_since(t0);
+
+  t0 = Clock::now();
+  validate_registration(d.refinement, prior, options_.validation, result);
+  d.timings.validation_ms = ms_since(t0);
+  if (!result.success && result.reason.empty()) {
+    result.reason = failure_name(result.failure);
+  }
   return finish(result);
 }
 

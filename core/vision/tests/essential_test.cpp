@@ -175,27 +175,5 @@ TEST(Essential, PlanarSceneFollowsThePriorToTheOtherPlanarSolution) {
   EXPECT_TRUE(found_other) << "no second physical homography decomposition";
 }
 
-TEST(Essential, PredictedMeasurementMatchesNumericJacobianPropagation) {
-  RelativePosePrior prior;
-  prior.x_i_j << 0.5, -0.3, 0.1, 0.02, -0.01, 0.3;
-  Mat6 A = Mat6::Random();
-  prior.covariance = A * A.transpose() * 1e-2 + Mat6::Identity() * 1e-4;
-  Vec5 z;
-  Mat5 S;
-  ASSERT_TRUE(predicted_measurement(prior, &z, &S));
-  // Independent reference: central differences of measurement_from_pose.
-  auto h = [](const Vec6& x) {
-    return measurement_from_pose(core::rotation_from_euler(x.tail<3>()), x.head<3>());
-  };
-  Eigen::Matrix<double, 5, 6> G;
-  for (int c = 0; c < 6; ++c) {
-    Vec6 d = Vec6::Zero();
-    d[c] = 1e-6;
-    G.col(c) = (h(prior.x_i_j + d) - h(prior.x_i_j - d)) / 2e-6;
-  }
-  EXPECT_LT((z - h(prior.x_i_j)).norm(), 1e-12);
-  EXPECT_LT((S - G * prior.covariance * G.transpose()).norm(), 1e-6 * S.norm());
-}
-
 }  // namespace
 }  // namespace nav::vision

@@ -14,6 +14,7 @@
 #include <iterator>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "nav/core/geometry/rotation.h"
@@ -47,6 +48,39 @@ TEST(Registration, SkerkiConsecutivePairsWithinAStripRegister) {
                 r.success ? "registered" : r.reason.c_str());
     EXPECT_TRUE(r.success) << "img_" << i + 1 << "-img_" << j + 1 << ": " << r.reason;
     EXPECT_GE(r.inliers, 30);
+  }
+}
+
+TEST(Registration, ConcurrentCallsGiveTheSequentialResults) {
+  // One Registration shared by two threads: features of different images, then pairs.
+  NAV_REQUIRE_DATA(first, "images/skerki/img_1.tif");
+  const cv::Mat a = read(first), b = read(first.parent_path() / "img_2.tif");
+  const Registration registration(nominal_pinhole(a.cols, a.rows), RegistrationOptions{});
+  const ImageFeatures fa = registration.features(a), fb = registration.features(b);
+  const RegistrationResult sequential = registration.register_pair(fa, fb, nullptr);
+  ASSERT_TRUE(sequential.success) << sequential.reason;
+
+  ImageFeatures ta, tb;
+  RegistrationResult r1, r2;
+  {
+    std::thread t1([&] { ta = registration.features(a); });
+    std::thread t2([&] { tb = registration.features(b); });
+    t1.join();
+    t2.join();
+  }
+  EXPECT_EQ(ta.size(), fa.size());
+  EXPECT_EQ(tb.size(), fb.size());
+  EXPECT_EQ(cv::norm(ta.descriptors, fa.descriptors, cv::NORM_INF), 0.0);
+  {
+    std::thread t1([&] { r1 = registration.register_pair(fa, fb, nullptr); });
+    std::thread t2([&] { r2 = registration.register_pair(fa, fb, nullptr); });
+    t1.join();
+    t2.join();
+  }
+  for (const RegistrationResult* r : {&r1, &r2}) {
+    ASSERT_TRUE(r->success) << r->reason;
+    // LMedS draws random samples (OpenCV's per-thread generator): equal to well within noise.
+    EXPECT_LT((r->z - sequential.z).cwiseAbs().maxCoeff(), 2e-3);
   }
 }
 

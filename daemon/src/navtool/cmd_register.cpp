@@ -172,7 +172,10 @@ void run_register(const RegisterArgs& args) {
     (void)registration.try_preprocess(image_j, &grey_j);
     const cv::Mat picture =
         vision::draw_registration(grey_i, grey_j, features_i, features_j, diagnostics,
-                                  camera_file.camera, {});
+                                  camera_file.camera,
+                                  vision::search_bands(features_i, diagnostics, camera_file.camera,
+                                                       prior.get(), options.pccs,
+                                                       vision::DrawOptions{}.max_epipolar_lines));
     if (!cv::imwrite(args.draw_path, picture)) {
       throw CommandError("register: cannot write " + args.draw_path);
     }

@@ -28,6 +28,17 @@ struct DrawOptions {
   int max_inlier_links = 60;    ///< Inlier correspondences joined across the images.
 };
 
+/// PCCS search bands (pccs.h search_region) of up to `count` features of image i, spread over
+/// the pair's essential-matrix inliers (or over all of image i's features when there are none);
+/// half-width = sqrt(gate x largest eigenvalue of S(d)). Empty without a prior. With count =
+/// DrawOptions::max_epipolar_lines the sample is the features whose epipolar lines are drawn,
+/// and each band takes its line's colour.
+std::vector<SearchBand> search_bands(const ImageFeatures& features_i,
+                                     const RegistrationDiagnostics& diagnostics,
+                                     const CameraIntrinsics& camera,
+                                     const RelativePosePrior* prior, const PccsOptions& options,
+                                     int count);
+
 /// Side-by-side BGR picture (8-bit grey inputs, as the Preprocessor makes them).
 cv::Mat draw_registration(const cv::Mat& image_i_8u, const cv::Mat& image_j_8u,
                           const ImageFeatures& features_i, const ImageFeatures& features_j,

@@ -52,17 +52,6 @@ struct EssentialOptions {
   double min_sigma_px = 0.2;        ///< Floor of the robust sigma, pixels.
 };
 
-/// The 5-DOF measurement z = [azimuth, elevation, roll, pitch, heading] of a rotation R_i_j and
-/// a baseline direction t_i_j (CameraRelativePoseModel convention).
-Vec5 measurement_from_pose(const Eigen::Matrix3d& R_i_j, const Eigen::Vector3d& t_i_j);
-
-/// The prior's predicted measurement and its 5x5 covariance G P G^T (G = dz/dx_i_j). False when
-/// the prior's baseline has no defined azimuth (|[t_x t_y]| < 1e-9 m).
-bool predicted_measurement(const RelativePosePrior& prior, Vec5* z, Mat5* covariance);
-
-/// Mahalanobis distance squared (angles wrapped) of z from the prediction (z_hat, S).
-double measurement_mahalanobis2(const Vec5& z, const Vec5& z_hat, const Mat5& S);
-
 /// Triangulated depths (along each camera's optical axis) of a correspondence of normalised
 /// coordinates under the pose (R_i_j, t_i_j), by the midpoint method. Returns false when the
 /// rays are parallel.

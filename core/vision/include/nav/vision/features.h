@@ -24,7 +24,10 @@ struct FeatureOptions {
   double harris_min_distance_px = 6.0;    ///< Minimum spacing of kept corners.
   int harris_block_size = 5;              ///< Structure-tensor window, px.
   double harris_k = 0.04;                 ///< Harris' det - k trace^2 constant.
-  float harris_descriptor_size_px = 24.0f;  ///< SIFT support diameter for a corner.
+  /// SIFT keypoint size of a corner: the descriptor window is 4 x 3 x size / 2 = 6 x size pixels
+  /// wide (OpenCV SIFT), so 16 px describes a ~96 px patch (on Sparus, sizes 7/12/16 gave
+  /// median rotation errors 0.67/0.59/0.53 deg).
+  float harris_descriptor_size_px = 16.0f;
   bool use_sift = true;
   int max_sift = 1500;                    ///< Strongest SIFT keypoints kept (0 = all).
   double sift_contrast_threshold = 0.03;  ///< Lowe's DoG contrast threshold.

@@ -23,8 +23,11 @@
 #include "nav/vision/essential.h"
 #include "nav/vision/features.h"
 #include "nav/vision/matching.h"
+#include "nav/vision/pccs.h"
 #include "nav/vision/preprocess.h"
+#include "nav/vision/two_view_refinement.h"
 #include "nav/vision/types.h"
+#include "nav/vision/validation.h"
 
 namespace nav::vision {
 
@@ -32,7 +35,19 @@ struct RegistrationOptions {
   PreprocessOptions preprocess;
   FeatureOptions features;
   MatchingOptions matching;
+  PccsOptions pccs;
   EssentialOptions essential;
+  /// Refinement; its parallax floor is below EssentialOptions::min_parallax_px, which decides
+  /// pure rotation (slow survey pairs with ~0.1 deg parallax still measure the rotation).
+  TwoViewRefinementOptions refinement = [] {
+    TwoViewRefinementOptions o;
+    o.min_parallax_deg = 0.02;
+    return o;
+  }();
+  ValidationOptions validation;
+  /// Inliers whose derotated parallax (pixels) is below this are not handed to the refinement:
+  /// their depth is unobservable (information near singular, sign of the depth undetermined).
+  double min_point_parallax_px = 0.5;
   int min_features = 8;  ///< Fewer features in either image: kTooFewFeatures.
   int min_inliers = 12;  ///< Fewer essential-matrix inliers: kTooFewInliers.
   /// Smallest inlier fraction of the putative matches: below it the "model" is most likely
@@ -53,6 +68,7 @@ struct StageTimings {
 struct RegistrationDiagnostics {
   PutativeMatches matches;
   EssentialEstimate essential;
+  TwoViewRefinement refinement;
   StageTimings timings;
 };
 
