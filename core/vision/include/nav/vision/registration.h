@@ -41,7 +41,7 @@ struct RegistrationOptions {
   /// pure rotation (slow survey pairs with ~0.1 deg parallax still measure the rotation).
   TwoViewRefinementOptions refinement = [] {
     TwoViewRefinementOptions o;
-    o.min_parallax_deg = 0.02;
+    o.min_parallax_sigma = 0.25;  // 0.125 px at the default 0.5 px sigma
     return o;
   }();
   ValidationOptions validation;
