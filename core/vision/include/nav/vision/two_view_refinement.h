@@ -4,16 +4,18 @@
 // A6.3 (sparse Levenberg-Marquardt); Triggs et al., "Bundle adjustment - a modern synthesis",
 // 2000, section 6.1 (Schur complement) and 9 (gauge)).
 //
-// Parameters: z = [azimuth, elevation, roll, pitch, heading] of camera j in camera i
-// (relative_pose_5dof.h) and one 3-D point X_k per match in camera i's frame (solved for in
-// inverse depth, which stays finite for distant points), with the baseline fixed to unit
-// length (the scale gauge: depths come out in baseline units). Camera i sits at the origin. Cost
-// (pixel_sigma_px the isotropic feature noise, rho the Huber loss):
+// Unknowns: the pose z = [azimuth, elevation, roll, pitch, heading] of camera j in camera i
+// (relative_pose_5dof.h) and one 3-D point X_k per match in camera i's frame, with the baseline
+// fixed to unit length (the scale gauge: depths come out in baseline units). Camera i sits at
+// the origin. Cost (pixel_sigma_px = s the isotropic feature noise, rho the Huber loss):
 //   sum_k rho(|u_i,k - pi(K X_k)|^2 / s^2) + rho(|u_j,k - pi(K R^T (X_k - t_unit(z)))|^2 / s^2)
 // minimised by Levenberg-Marquardt with the 3x3 point blocks eliminated (Schur complement) at
 // every iteration, robust weights by iteratively reweighted least squares (Triggs section 3.3).
+// The solver works in inverse-depth points (finite for distant points) and updates the unit
+// baseline on its tangent plane (no pole where it points along the optical axis); each accepted
+// step is followed by point-only Gauss-Newton steps (two_view_problem.h).
 // Stops on a small relative cost decrease, a small step, or a pose step below
-// pose_step_tolerance_sigma standard deviations of z (S-norm of the step). Then matches with a
+// pose_step_tolerance_sigma standard deviations (S-norm of the step). Then matches with a
 // residual beyond the Huber kink in either image are rejected and the rest re-solved (up to
 // three rounds), as are matches whose point ends behind a camera (a distant point may cross
 // infinity within its noise), so the final solution and its information have unit weights: with
@@ -21,11 +23,12 @@
 // cost) and would leave down-weighted terms in the covariance.
 // Points start from the linear (DLT) triangulation with the initial (R_i_j, t_unit).
 //
-// Covariance: at the solution, the 5x5 covariance of z is the inverse of the Schur complement
-//   S = H_zz - sum_k H_zk H_kk^-1 H_kz
+// Covariance: at the solution, the inverse of the Schur complement
+//   S = H_pp - sum_k H_pk H_kk^-1 H_kp
 // of the information H = J^T J of the whitened residuals of the kept matches (all inside the
-// Huber kink, so unit weights), i.e. the 3-D points are marginalised: equal to the top-left 5x5
-// block of the dense inverse of H.
+// Huber kink, so unit weights) in the solver's pose parameters p, mapped to z by dz/dp: the
+// 3-D points are marginalised, equal to the top-left 5x5 block of the dense inverse of the
+// information in (z, points).
 //
 // Failures (converged == false, `reason` says why and with which numbers): fewer than
 // min_points usable matches; too many matches triangulating behind either camera; median
