@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <opencv2/core/hal/hal.hpp>
 #include <sstream>
 #include <stdexcept>
 
@@ -76,8 +77,13 @@ class PointTransfer {
     depth_far_m_ = std::max(depth_near_m_, prior.scene_depth_m + k);
   }
 
-  SearchRegion region(const Eigen::Vector2d& u_i) const {
-    SearchRegion out;
+  /// Fills `out` (its storage is reused across calls).
+  void region(const Eigen::Vector2d& u_i, SearchRegion& out) const {
+    out.centres_px.clear();
+    out.covariances_px2.clear();
+    out.informations_px2.clear();
+    out.depths_m.clear();
+    out.bounds_px.setEmpty();
     out.gate_chi2 = gate_.gate_chi2;
     const int n = depth_far_m_ > depth_near_m_ ? options_.depth_samples + 1 : 1;
     const Eigen::Vector3d ray((u_i.x() - camera_.cx_px) / camera_.fx_px,
@@ -117,7 +123,6 @@ class PointTransfer {
       out.bounds_px.extend(out.centres_px[k] - half);
       out.bounds_px.extend(out.centres_px[k] + half);
     }
-    return out;
   }
 
  private:
@@ -191,14 +196,7 @@ void require_descriptors(const ImageFeatures& f, const char* which) {
 }
 
 float distance2(const cv::Mat& a, int ia, const cv::Mat& b, int ib) {
-  const float* pa = a.ptr<float>(ia);
-  const float* pb = b.ptr<float>(ib);
-  float s = 0.0f;
-  for (int k = 0; k < a.cols; ++k) {
-    const float d = pa[k] - pb[k];
-    s += d * d;
-  }
-  return s;
+  return cv::hal::normL2Sqr_(a.ptr<float>(ia), b.ptr<float>(ib), a.cols);  // SIMD
 }
 
 /// Best and second-best candidate per feature of i, best per feature of j; then ratio test and
@@ -245,19 +243,20 @@ class MatchAccumulator {
 
 }  // namespace
 
-double SearchRegion::mahalanobis2(const Eigen::Vector2d& q) const {
-  if (centres_px.empty()) return kInf;
-  if (centres_px.size() == 1) {
+double SearchRegion::segment_mahalanobis2(std::size_t k, const Eigen::Vector2d& q) const {
+  const std::size_t n = centres_px.size();
+  if (n == 0) return kInf;
+  if (n == 1) {
     const Eigen::Vector2d e = q - centres_px[0];
     return e.dot(informations_px2[0] * e);
   }
+  return std::min(segment_distance2(q, centres_px[k], centres_px[k + 1], informations_px2[k]),
+                  segment_distance2(q, centres_px[k], centres_px[k + 1], informations_px2[k + 1]));
+}
+
+double SearchRegion::mahalanobis2(const Eigen::Vector2d& q) const {
   double best = kInf;
-  for (std::size_t k = 0; k + 1 < centres_px.size(); ++k) {
-    best =
-        std::min(best, segment_distance2(q, centres_px[k], centres_px[k + 1], informations_px2[k]));
-    best = std::min(
-        best, segment_distance2(q, centres_px[k], centres_px[k + 1], informations_px2[k + 1]));
-  }
+  for (std::size_t k = 0; k < segments(); ++k) best = std::min(best, segment_mahalanobis2(k, q));
   return best;
 }
 
@@ -274,7 +273,9 @@ PccsGate pccs_gate(double confidence) {
 
 SearchRegion search_region(const Eigen::Vector2d& u_i_px, const CameraIntrinsics& camera,
                            const RelativePosePrior& prior, const PccsOptions& options) {
-  return PointTransfer(camera, prior, options).region(u_i_px);
+  SearchRegion out;
+  PointTransfer(camera, prior, options).region(u_i_px, out);
+  return out;
 }
 
 PutativeMatches match_pose_constrained(const ImageFeatures& i, const ImageFeatures& j,
@@ -292,12 +293,12 @@ PutativeMatches match_pose_constrained(const ImageFeatures& i, const ImageFeatur
   const PointTransfer transfer(camera, prior, options);
   const PointGrid grid(j.points_px, j.width_px, j.height_px, options.grid_cell_px);
   MatchAccumulator acc(i.size(), j.size());
-  std::vector<int> visited(j.size(), -1);
+  std::vector<int> accepted(j.size(), -1);
+  SearchRegion region;
   for (std::size_t a = 0; a < i.size(); ++a) {
-    const SearchRegion region = transfer.region(i.points_px[a]);
+    transfer.region(i.points_px[a], region);
     const std::size_t n = region.centres_px.size();
-    const std::size_t segments = n <= 1 ? n : n - 1;  // one point region: one "segment"
-    for (std::size_t k = 0; k < segments; ++k) {
+    for (std::size_t k = 0; k < region.segments(); ++k) {
       const std::size_t k1 = std::min(k + 1, n - 1);
       const auto& S0 = region.covariances_px2[k];
       const auto& S1 = region.covariances_px2[k1];
@@ -305,10 +306,15 @@ PutativeMatches match_pose_constrained(const ImageFeatures& i, const ImageFeatur
                                  std::sqrt(region.gate_chi2 * std::max(S0(1, 1), S1(1, 1))));
       const Eigen::Vector2d lo = region.centres_px[k].cwiseMin(region.centres_px[k1]) - half;
       const Eigen::Vector2d hi = region.centres_px[k].cwiseMax(region.centres_px[k1]) + half;
+      // A candidate is tested against this sub-segment only; it is marked when accepted, so a
+      // point inside several sub-segments is compared once and one outside this sub-segment
+      // is still tested against the others (the region is their union).
       grid.visit(lo, hi, [&](int b) {
-        if (visited[b] == static_cast<int>(a)) return;
-        visited[b] = static_cast<int>(a);
-        if (!region.contains(j.points_px[b])) return;
+        if (accepted[b] == static_cast<int>(a)) return;
+        const Eigen::Vector2d& q = j.points_px[b];
+        if ((q.array() < lo.array()).any() || (q.array() > hi.array()).any()) return;
+        if (!(region.segment_mahalanobis2(k, q) <= region.gate_chi2)) return;
+        accepted[b] = static_cast<int>(a);
         ++out.descriptor_comparisons;
         acc.add(static_cast<int>(a), b,
                 distance2(i.descriptors, static_cast<int>(a), j.descriptors, b));

@@ -60,6 +60,12 @@ struct SearchRegion {
 
   /// False when no depth sample lands in front of camera j (the region is empty).
   bool valid() const { return !centres_px.empty(); }
+  /// Sub-segments of the polyline (a one-sample region has one, a point).
+  std::size_t segments() const {
+    return centres_px.size() <= 1 ? centres_px.size() : centres_px.size() - 1;
+  }
+  /// Mahalanobis distance squared from q to sub-segment k (smaller of its two end metrics).
+  double segment_mahalanobis2(std::size_t k, const Eigen::Vector2d& q_px) const;
   /// Smallest Mahalanobis distance squared from q to the region's polyline; +inf if !valid().
   double mahalanobis2(const Eigen::Vector2d& q_px) const;
   bool contains(const Eigen::Vector2d& q_px) const { return mahalanobis2(q_px) <= gate_chi2; }
