@@ -5,6 +5,7 @@
 #include "two_view_problem.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <Eigen/SVD>
 #include <algorithm>
@@ -30,14 +31,11 @@ Eigen::Vector2d project(const CameraIntrinsics& c, const Eigen::Vector3d& X, Mat
 double huber_rho(double s, double c) { return s <= c * c ? s : 2.0 * c * std::sqrt(s) - c * c; }
 double huber_weight(double s, double c) { return s <= c * c ? 1.0 : c / std::sqrt(s); }
 
-/// Keeps z in its canonical ranges (azimuth, angles wrapped; elevation in [-pi/2, pi/2]).
-Vec5 canonical(const Vec5& z) { return z_from_relative_pose(relative_pose_from_z(z, 1.0)); }
-
-NormalEquations build(const Vec5& z, const std::vector<Eigen::Vector3d>& X,
+NormalEquations build(const PoseState& x, const std::vector<Eigen::Vector3d>& X,
                       const std::vector<Eigen::Vector2d>& u_i,
                       const std::vector<Eigen::Vector2d>& u_j, const CameraIntrinsics& cam,
                       double inv_sigma, double huber_c) {
-  const PoseTerms pose(z);
+  const PoseTerms pose(x);
   NormalEquations ne;
   ne.H_kk.resize(X.size());
   ne.H_zk.resize(X.size());
@@ -56,10 +54,10 @@ NormalEquations build(const Vec5& z, const std::vector<Eigen::Vector3d>& X,
   return ne;
 }
 
-double robust_cost(const Vec5& z, const std::vector<Eigen::Vector3d>& X,
+double robust_cost(const PoseState& x, const std::vector<Eigen::Vector3d>& X,
                    const std::vector<Eigen::Vector2d>& u_i, const std::vector<Eigen::Vector2d>& u_j,
                    const CameraIntrinsics& cam, double inv_sigma, double huber_c) {
-  const PoseTerms pose(z);
+  const PoseTerms pose(x);
   double cost = 0.0;
   for (std::size_t k = 0; k < X.size(); ++k) {
     const PointResidual p = point_residual(pose, cam, X[k], u_i[k], u_j[k], inv_sigma, false);
@@ -68,15 +66,64 @@ double robust_cost(const Vec5& z, const std::vector<Eigen::Vector3d>& X,
   return cost;
 }
 
+/// A few Gauss-Newton steps on each point alone at fixed pose (each point's cost only goes
+/// down). Interleaved with the joint steps this follows the long curved valley of weak
+/// baselines, where the inverse depths and the baseline direction trade off, in far fewer
+/// iterations (as in variable projection, the points are kept near their optimum).
+void refine_points(const PoseState& x, std::vector<Eigen::Vector3d>& X,
+                   const std::vector<Eigen::Vector2d>& ui, const std::vector<Eigen::Vector2d>& uj,
+                   const CameraIntrinsics& cam, double inv_sigma, double c) {
+  const PoseTerms pose(x);
+  for (std::size_t k = 0; k < X.size(); ++k) {
+    for (int it = 0; it < 2; ++it) {
+      const PointResidual p = point_residual(pose, cam, X[k], ui[k], uj[k], inv_sigma, true);
+      const double s_i = p.r_i.squaredNorm(), s_j = p.r_j.squaredNorm();
+      const double w_i = huber_weight(s_i, c), w_j = huber_weight(s_j, c);
+      const Eigen::Matrix3d H =
+          w_i * p.J_i_p.transpose() * p.J_i_p + w_j * p.J_j_p.transpose() * p.J_j_p;
+      const Eigen::Vector3d g =
+          w_i * p.J_i_p.transpose() * p.r_i + w_j * p.J_j_p.transpose() * p.r_j;
+      Eigen::Matrix3d H_inv;
+      bool invertible = false;
+      H.computeInverseWithCheck(H_inv, invertible, 1e-300);
+      if (!invertible) break;
+      const Eigen::Vector3d candidate = X[k] - H_inv * g;
+      const PointResidual q = point_residual(pose, cam, candidate, ui[k], uj[k], inv_sigma, false);
+      const double before = huber_rho(s_i, c) + huber_rho(s_j, c);
+      const double after = huber_rho(q.r_i.squaredNorm(), c) + huber_rho(q.r_j.squaredNorm(), c);
+      if (!(after < before)) break;
+      X[k] = candidate;
+    }
+  }
+}
+
 }  // namespace
 
-PoseTerms::PoseTerms(const Vec5& z) {
-  const Eigen::Vector3d rpy = z.tail<3>();
-  R_j_i = core::rotation_from_euler(rpy).transpose();
-  dR_j_i[0] = core::dR_droll(rpy).transpose();
-  dR_j_i[1] = core::dR_dpitch(rpy).transpose();
-  dR_j_i[2] = core::dR_dheading(rpy).transpose();
-  t = baseline_direction(z[0], z[1], &dt);
+Mat3x2 tangent_basis(const Eigen::Vector3d& t) {
+  const Eigen::Vector3d a =
+      std::abs(t.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d b1 = (a - a.dot(t) * t).normalized();
+  Mat3x2 B;
+  B << b1, t.cross(b1);
+  return B;
+}
+
+PoseState pose_from_z(const Vec5& z) { return {z.tail<3>(), baseline_direction(z[0], z[1])}; }
+
+PoseState retract(const PoseState& x, const Vec5& delta) {
+  PoseState out;
+  out.t = (x.t + tangent_basis(x.t) * delta.head<2>()).normalized();
+  for (int a = 0; a < 3; ++a) out.rpy[a] = core::wrap_angle(x.rpy[a] + delta[2 + a]);
+  return out;
+}
+
+PoseTerms::PoseTerms(const PoseState& x) {
+  R_j_i = core::rotation_from_euler(x.rpy).transpose();
+  dR_j_i[0] = core::dR_droll(x.rpy).transpose();
+  dR_j_i[1] = core::dR_dpitch(x.rpy).transpose();
+  dR_j_i[2] = core::dR_dheading(x.rpy).transpose();
+  t = x.t;
+  B = tangent_basis(x.t);
 }
 
 Eigen::Vector3d to_inverse_depth(const Eigen::Vector3d& X) {
@@ -107,7 +154,7 @@ PointResidual point_residual(const PoseTerms& pose, const CameraIntrinsics& cam,
     dw_dp.col(2) = -pose.t;
     out.J_j_p = Jp_j * pose.R_j_i * dw_dp * inv_sigma;
     Eigen::Matrix<double, 3, 5> dXj_dz;
-    dXj_dz.leftCols<2>() = -p.z() * pose.R_j_i * pose.dt;
+    dXj_dz.leftCols<2>() = -p.z() * pose.R_j_i * pose.B;
     for (int a = 0; a < 3; ++a) dXj_dz.col(2 + a) = pose.dR_j_i[a] * w;
     out.J_j_z = Jp_j * dXj_dz * inv_sigma;
   }
@@ -148,7 +195,7 @@ bool schur(const NormalEquations& ne, double lambda, Mat5& S, Vec5& b,
   return S.allFinite() && b.allFinite();
 }
 
-LmOutcome levenberg_marquardt(Vec5& z, std::vector<Eigen::Vector3d>& X,
+LmOutcome levenberg_marquardt(PoseState& x, std::vector<Eigen::Vector3d>& X,
                               const std::vector<Eigen::Vector2d>& ui,
                               const std::vector<Eigen::Vector2d>& uj, const CameraIntrinsics& cam,
                               double inv_sigma, double c, const TwoViewRefinementOptions& opt,
@@ -156,7 +203,7 @@ LmOutcome levenberg_marquardt(Vec5& z, std::vector<Eigen::Vector3d>& X,
   LmOutcome out;
   const std::size_t n = X.size();
   double lambda = 1e-4;
-  ne = build(z, X, ui, uj, cam, inv_sigma, c);
+  ne = build(x, X, ui, uj, cam, inv_sigma, c);
   std::vector<Eigen::Matrix3d> C_inv;
   for (; out.iterations < opt.max_iterations && !out.converged; ++out.iterations) {
     Mat5 S;
@@ -177,15 +224,16 @@ LmOutcome levenberg_marquardt(Vec5& z, std::vector<Eigen::Vector3d>& X,
       X_new[k] = X[k] + dx;
       step2 += dx.squaredNorm();
     }
-    const Vec5 z_new = canonical(z + dz);
-    const double cost_new = robust_cost(z_new, X_new, ui, uj, cam, inv_sigma, c);
+    const PoseState x_new = retract(x, dz);
+    const double cost_new = robust_cost(x_new, X_new, ui, uj, cam, inv_sigma, c);
     if (std::isfinite(cost_new) && cost_new <= ne.cost) {
       out.last_relative_decrease = (ne.cost - cost_new) / std::max(ne.cost, 1e-300);
-      z = z_new;
+      x = x_new;
       X = std::move(X_new);
-      ne = build(z, X, ui, uj, cam, inv_sigma, c);
+      refine_points(x, X, ui, uj, cam, inv_sigma, c);
+      ne = build(x, X, ui, uj, cam, inv_sigma, c);
       lambda = std::max(lambda / 10.0, 1e-12);
-      // Pose step in standard deviations of z (S-norm): stops once z no longer moves even if
+      // Pose step in standard deviations (S-norm): stops once the pose no longer moves even if
       // the points of down-weighted mismatches still drift.
       const double pose_step_sigma = std::sqrt(std::max(0.0, dz.dot(S * dz)));
       out.converged = out.last_relative_decrease < opt.function_tolerance ||
@@ -200,11 +248,11 @@ LmOutcome levenberg_marquardt(Vec5& z, std::vector<Eigen::Vector3d>& X,
   return out;
 }
 
-Eigen::VectorXd stacked_residuals(const Vec5& z, const std::vector<Eigen::Vector3d>& p,
+Eigen::VectorXd stacked_residuals(const PoseState& x, const std::vector<Eigen::Vector3d>& p,
                                   const std::vector<Eigen::Vector2d>& u_i,
                                   const std::vector<Eigen::Vector2d>& u_j,
                                   const CameraIntrinsics& cam, double inv_sigma) {
-  const PoseTerms pose(z);
+  const PoseTerms pose(x);
   Eigen::VectorXd r(4 * static_cast<Eigen::Index>(p.size()));
   for (std::size_t k = 0; k < p.size(); ++k) {
     const PointResidual e = point_residual(pose, cam, p[k], u_i[k], u_j[k], inv_sigma, false);

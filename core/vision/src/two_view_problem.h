@@ -22,13 +22,27 @@ using Mat23 = Eigen::Matrix<double, 2, 3>;
 using Mat25 = Eigen::Matrix<double, 2, 5>;
 using Mat53 = Eigen::Matrix<double, 5, 3>;
 
-/// Pose-dependent quantities of z shared by every point.
+/// The pose while solving: Euler angles of R_i_j and the unit baseline t_i_j. Updated by a
+/// 5-vector delta = [b (2); d_rpy (3)], t <- normalise(t + B b) with B an orthonormal basis of
+/// t's tangent plane: unlike (azimuth, elevation) this has no singularity where the baseline
+/// points along the optical axis (forward or vertical motion), where the solve would crawl.
+struct PoseState {
+  Eigen::Vector3d rpy = Eigen::Vector3d::Zero();
+  Eigen::Vector3d t = Eigen::Vector3d::UnitX();
+};
+
+/// Orthonormal 3x2 basis of the plane orthogonal to the unit vector t.
+Mat3x2 tangent_basis(const Eigen::Vector3d& t);
+PoseState pose_from_z(const Vec5& z);
+PoseState retract(const PoseState& x, const Vec5& delta);
+
+/// Pose-dependent quantities shared by every point.
 struct PoseTerms {
   Eigen::Matrix3d R_j_i;                  ///< R_i_j^T
   std::array<Eigen::Matrix3d, 3> dR_j_i;  ///< d(R_i_j^T) / d(roll, pitch, heading)
   Eigen::Vector3d t;                      ///< Unit baseline t_i_j.
-  Mat3x2 dt;                              ///< d t / d(azimuth, elevation)
-  explicit PoseTerms(const Vec5& z);
+  Mat3x2 B;                               ///< tangent_basis(t): d t / d b at b = 0.
+  explicit PoseTerms(const PoseState& x);
 };
 
 Eigen::Vector3d to_inverse_depth(const Eigen::Vector3d& X);
@@ -74,16 +88,16 @@ struct LmOutcome {
   std::string error;  // non-empty: numerical failure
 };
 
-/// Sparse Levenberg-Marquardt (Hartley & Zisserman A6.3) from (z, p) with Huber kink c (in
-/// sigmas); `ne` returns the normal equations at the final (z, p).
-LmOutcome levenberg_marquardt(Vec5& z, std::vector<Eigen::Vector3d>& p,
+/// Sparse Levenberg-Marquardt (Hartley & Zisserman A6.3) from (x, p) with Huber kink c (in
+/// sigmas); `ne` returns the normal equations (in delta, see PoseState) at the final (x, p).
+LmOutcome levenberg_marquardt(PoseState& x, std::vector<Eigen::Vector3d>& p,
                               const std::vector<Eigen::Vector2d>& ui,
                               const std::vector<Eigen::Vector2d>& uj, const CameraIntrinsics& cam,
                               double inv_sigma, double c, const TwoViewRefinementOptions& opt,
                               NormalEquations& ne);
 
 /// Whitened residuals [r_i; r_j] per point (no robust loss) of inverse-depth points.
-Eigen::VectorXd stacked_residuals(const Vec5& z, const std::vector<Eigen::Vector3d>& p,
+Eigen::VectorXd stacked_residuals(const PoseState& x, const std::vector<Eigen::Vector3d>& p,
                                   const std::vector<Eigen::Vector2d>& u_i,
                                   const std::vector<Eigen::Vector2d>& u_j,
                                   const CameraIntrinsics& cam, double inv_sigma);

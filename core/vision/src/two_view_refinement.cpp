@@ -5,11 +5,13 @@
 #include "nav/vision/two_view_refinement.h"
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
+#include "nav/core/geometry/rotation.h"
 #include "nav/vision/relative_pose_5dof.h"
 #include "two_view_problem.h"
 
@@ -39,7 +41,7 @@ Eigen::VectorXd two_view_residuals(const Vec5& z, const std::vector<Eigen::Vecto
                                    const CameraIntrinsics& camera, double pixel_sigma_px) {
   std::vector<Eigen::Vector3d> p(points_i.size());
   for (std::size_t k = 0; k < points_i.size(); ++k) p[k] = to_inverse_depth(points_i[k]);
-  return stacked_residuals(z, p, u_i_px, u_j_px, camera, 1.0 / pixel_sigma_px);
+  return stacked_residuals(pose_from_z(z), p, u_i_px, u_j_px, camera, 1.0 / pixel_sigma_px);
 }
 
 TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
@@ -63,12 +65,13 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
     why << n_in << " matches, fewer than the " << opt.min_points << " needed";
     return fail(out, why.str(), RegistrationFailure::kTooFewInliers);
   }
-  Vec5 z;
-  try {
-    z = z_from_rotation_translation(R_i_j_initial, t_i_j_initial);
-  } catch (const std::domain_error& e) {
-    return fail(out, std::string("initial pose: ") + e.what());
+  if (!(t_i_j_initial.norm() > 0.0) || !t_i_j_initial.allFinite() || !R_i_j_initial.allFinite()) {
+    why << "initial pose has no baseline direction (t = [" << t_i_j_initial.transpose() << "])";
+    return fail(out, why.str());
   }
+  PoseState x;
+  x.rpy = core::euler_from_rotation(R_i_j_initial);
+  x.t = t_i_j_initial.normalized();
 
   const double focal_px = 0.5 * (cam.fx_px + cam.fy_px);
   const double min_parallax_px = opt.min_parallax_sigma * opt.pixel_sigma_px;
@@ -79,7 +82,7 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
     // Parallax before anything else: the angle between the two viewing rays of each match
     // (ray j rotated into camera i) is ~0 for a pure rotation, whatever the initial baseline.
     // In pixels at the mean focal length, comparable with the feature noise.
-    const Eigen::Matrix3d R = rotation_from_z(z);
+    const Eigen::Matrix3d R = core::rotation_from_euler(x.rpy);
     std::vector<double> ray_angle_px(static_cast<std::size_t>(n_in));
     for (int k = 0; k < n_in; ++k) {
       const Eigen::Vector3d a = normalised(u_i_px[k]).homogeneous();
@@ -100,7 +103,7 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
   std::vector<Eigen::Vector3d> X;
   std::vector<Eigen::Vector2d> ui, uj;
   {
-    const PoseTerms pose(z);
+    const PoseTerms pose(x);
     for (int k = 0; k < n_in; ++k) {
       const Eigen::Vector3d p =
           triangulate(normalised(u_i_px[k]), normalised(u_j_px[k]), pose.R_j_i, pose.t);
@@ -135,13 +138,12 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
   const double c = opt.huber_threshold_sigma;
   const std::size_t n_front = X.size();
   out.initial_rms_px =
-      opt.pixel_sigma_px * std::sqrt(stacked_residuals(z, X, ui, uj, cam, inv_sigma).squaredNorm() /
+      opt.pixel_sigma_px * std::sqrt(stacked_residuals(x, X, ui, uj, cam, inv_sigma).squaredNorm() /
                                      static_cast<double>(4 * n_front));
   // Fills the solution's numbers into `out` (also for failures after the solve, as diagnosis).
   const auto summarise = [&]() {
     const std::size_t n = X.size();
-    const PoseTerms pose(z);
-    out.z = z;
+    const PoseTerms pose(x);
     out.R_i_j = pose.R_j_i.transpose();
     out.t_i_j_unit = pose.t;
     std::vector<double> parallax(n);
@@ -158,7 +160,7 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
       const Eigen::Vector3d bb = m - rho * pose.t;  // ray of camera j, scaled by rho
       parallax[k] = std::atan2(m.cross(bb).norm(), m.dot(bb)) * focal_px;
     }
-    const double rss_whitened = stacked_residuals(z, X, ui, uj, cam, inv_sigma).squaredNorm();
+    const double rss_whitened = stacked_residuals(x, X, ui, uj, cam, inv_sigma).squaredNorm();
     out.reprojection_rms_px =
         opt.pixel_sigma_px * std::sqrt(rss_whitened / static_cast<double>(4 * n));
     // 4n residuals, 3n + 5 parameters: n - 5 degrees of freedom (n >= min_points >= 8 > 5).
@@ -170,18 +172,28 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
   constexpr int kRounds = 3;
   NormalEquations ne;
   for (int round = 0;; ++round) {
-    const LmOutcome lm = levenberg_marquardt(z, X, ui, uj, cam, inv_sigma, c, opt, ne);
+    const LmOutcome lm = levenberg_marquardt(x, X, ui, uj, cam, inv_sigma, c, opt, ne);
     out.iterations += lm.iterations;
     if (!lm.error.empty()) {
       summarise();
       why << lm.error << "; median parallax " << out.median_parallax_px << " px";
       return fail(out, why.str());
     }
+    // Keep the matches inside the Huber kink in both images and in front of both cameras
+    // (inverse depth rho > 0; a distant point may cross infinity within its noise).
     std::vector<std::size_t> keep;
-    const PoseTerms pose(z);
+    const PoseTerms pose(x);
     for (std::size_t k = 0; k < X.size(); ++k) {
       const PointResidual p = point_residual(pose, cam, X[k], ui[k], uj[k], inv_sigma, false);
-      if (std::max(p.r_i.norm(), p.r_j.norm()) <= c) keep.push_back(k);
+      const double rho = X[k].z();
+      const Eigen::Vector3d m(X[k].x(), X[k].y(), 1.0);
+      if (!(rho > 0.0) || !((pose.R_j_i * (m - rho * pose.t)).z() > 0.0)) {
+        ++out.behind_camera;
+      } else if (std::max(p.r_i.norm(), p.r_j.norm()) > c) {
+        ++out.rejected_outliers;
+      } else {
+        keep.push_back(k);
+      }
     }
     if (keep.size() == X.size()) {
       if (lm.converged) break;
@@ -191,11 +203,12 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
           << "); median parallax " << out.median_parallax_px << " px";
       return fail(out, why.str());
     }
-    out.rejected_outliers += static_cast<int>(X.size() - keep.size());
-    if (round + 1 >= kRounds || out.rejected_outliers > opt.max_fraction_outliers * n_front ||
+    const int dropped = static_cast<int>(n_front - keep.size());
+    if (round + 1 >= kRounds || dropped > opt.max_fraction_outliers * n_front ||
         static_cast<int>(keep.size()) < opt.min_points) {
-      why << out.rejected_outliers << " of " << n_front << " matches rejected as outliers ("
-          << keep.size() << " left after " << round + 1 << " rounds)";
+      why << out.rejected_outliers << " of " << n_front << " matches rejected as outliers and "
+          << out.behind_camera << " behind a camera (" << keep.size() << " left after " << round + 1
+          << " rounds)";
       return fail(out, why.str(), RegistrationFailure::kTooFewInliers);
     }
     std::vector<Eigen::Vector3d> X_keep;
@@ -219,7 +232,17 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
     return fail(out, why.str());
   }
 
-  // Marginal covariance of z: inverse of the undamped Schur complement at the solution.
+  Mat5x6 G;  // dz / d[t; rpy]
+  try {
+    Vec6 x_i_j;
+    x_i_j << x.t, x.rpy;
+    out.z = z_from_relative_pose(x_i_j, &G);
+  } catch (const std::domain_error& e) {
+    return fail(out, std::string("refined baseline along the optical axis: ") + e.what());
+  }
+
+  // Marginal covariance: inverse of the undamped Schur complement at the solution, in the
+  // solver's delta = [b; d_rpy], mapped to z with J = blockdiag(d(az, el)/dt B, I3).
   Mat5 S;
   Vec5 b;
   std::vector<Eigen::Matrix3d> C_inv;
@@ -227,13 +250,17 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
   const Eigen::SelfAdjointEigenSolver<Mat5> eig(S);
   const double ev_min = eig.eigenvalues()[0], ev_max = eig.eigenvalues()[4];
   if (!(ev_min > opt.min_rcond * ev_max)) {
-    why << "information of z is singular (eigenvalues " << ev_min << " .. " << ev_max
+    why << "information of the pose is singular (eigenvalues " << ev_min << " .. " << ev_max
         << "): baseline direction or rotation unobservable; median parallax "
         << out.median_parallax_px << " px";
     return fail(out, why.str());
   }
-  out.covariance = eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
-                   eig.eigenvectors().transpose();
+  const Mat5 covariance_delta = eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
+                                eig.eigenvectors().transpose();
+  Mat5 J = Mat5::Zero();
+  J.topLeftCorner<2, 2>() = G.topLeftCorner<2, 3>() * tangent_basis(x.t);
+  J.bottomRightCorner<3, 3>().setIdentity();
+  out.covariance = J * covariance_delta * J.transpose();
   out.converged = true;
   return out;
 }

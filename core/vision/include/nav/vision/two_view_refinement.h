@@ -5,17 +5,19 @@
 // 2000, section 6.1 (Schur complement) and 9 (gauge)).
 //
 // Parameters: z = [azimuth, elevation, roll, pitch, heading] of camera j in camera i
-// (relative_pose_5dof.h) and one 3-D point X_k per match in camera i's frame, with the baseline
-// fixed to unit length (the scale gauge: depths come out in baseline units). Camera i sits at
-// the origin. Cost (pixel_sigma_px the isotropic feature noise, rho the Huber loss):
+// (relative_pose_5dof.h) and one 3-D point X_k per match in camera i's frame (solved for in
+// inverse depth, which stays finite for distant points), with the baseline fixed to unit
+// length (the scale gauge: depths come out in baseline units). Camera i sits at the origin. Cost
+// (pixel_sigma_px the isotropic feature noise, rho the Huber loss):
 //   sum_k rho(|u_i,k - pi(K X_k)|^2 / s^2) + rho(|u_j,k - pi(K R^T (X_k - t_unit(z)))|^2 / s^2)
 // minimised by Levenberg-Marquardt with the 3x3 point blocks eliminated (Schur complement) at
 // every iteration, robust weights by iteratively reweighted least squares (Triggs section 3.3).
 // Stops on a small relative cost decrease, a small step, or a pose step below
 // pose_step_tolerance_sigma standard deviations of z (S-norm of the step). Then matches with a
 // residual beyond the Huber kink in either image are rejected and the rest re-solved (up to
-// three rounds), so the final solution and its information have unit weights: with gross
-// mismatches the robust loss alone crawls (their points drift along a flat valley of the
+// three rounds), as are matches whose point ends behind a camera (a distant point may cross
+// infinity within its noise), so the final solution and its information have unit weights: with
+// gross mismatches the robust loss alone crawls (their points drift along a flat valley of the
 // cost) and would leave down-weighted terms in the covariance.
 // Points start from the linear (DLT) triangulation with the initial (R_i_j, t_unit).
 //
@@ -28,10 +30,9 @@
 // Failures (converged == false, `reason` says why and with which numbers): fewer than
 // min_points usable matches; too many matches triangulating behind either camera; median
 // derotated parallax below min_parallax_sigma noise sigmas (pure rotation / zero baseline,
-// before and after the solve); more than
-// max_fraction_outliers rejected; non-finite or singular
-// information (reciprocal condition of S below min_rcond); no convergence within
-// max_iterations.
+// before and after the solve); more than max_fraction_outliers dropped after a solve;
+// non-finite or singular information (reciprocal condition of S below min_rcond); no
+// convergence within max_iterations.
 #include <Eigen/Core>
 #include <string>
 #include <vector>
@@ -41,15 +42,15 @@
 namespace nav::vision {
 
 struct TwoViewRefinementOptions {
-  double pixel_sigma_px = 0.5;         ///< Isotropic pixel noise of every feature, each axis.
-  double huber_threshold_sigma = 3.0;  ///< Huber kink in units of sigma (per residual pair).
-  int max_iterations = 50;
+  double pixel_sigma_px = 0.5;              ///< Isotropic pixel noise of every feature, each axis.
+  double huber_threshold_sigma = 3.0;       ///< Huber kink in units of sigma (per residual pair).
+  int max_iterations = 200;                 ///< Per solve round; weak baselines take ~100.
   double function_tolerance = 1e-8;         ///< Stop when relative cost decrease is below.
   double parameter_tolerance = 1e-10;       ///< Stop when the step norm is below (radians/units).
   double pose_step_tolerance_sigma = 1e-3;  ///< Stop when sqrt(dz^T S dz) is below.
   int min_points = 8;                       ///< Fewest usable matches.
   double max_fraction_behind = 0.5;         ///< Larger fraction of points behind a camera fails.
-  double max_fraction_outliers = 0.5;       ///< Larger fraction rejected as outliers fails.
+  double max_fraction_outliers = 0.5;       ///< Larger fraction dropped after a solve fails.
   /// Median derotated parallax (ray angle x mean focal length) below min_parallax_sigma x
   /// pixel_sigma_px fails as pure rotation: under a pure rotation the derotated disparity of a
   /// match is noise, Rayleigh with scale sqrt(2) sigma and median 1.67 sigma.
@@ -80,7 +81,7 @@ struct TwoViewRefinement {
   /// pixel_sigma_px). Much smaller or larger than pixel_sigma_px: the noise model is off.
   double residual_sigma_px = 0.0;
   int iterations = 0;
-  int behind_camera = 0;      ///< Matches dropped for negative depth.
+  int behind_camera = 0;      ///< Matches dropped behind a camera (initial DLT or after a solve).
   int rejected_outliers = 0;  ///< Matches dropped beyond the Huber kink.
 };
 
