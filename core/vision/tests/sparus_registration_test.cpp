@@ -109,7 +109,7 @@ TEST(SparusRegistration, MedianRotationErrorOfPairs1_3_6ApartAndRobustEstimators
               "%.1f ms per pair\n",
               e.successes, median(e.errors_deg), median(e.inliers), e.pair_ms);
   RecordProperty("lmeds_median_rotation_error_deg", std::to_string(median(e.errors_deg)));
-  EXPECT_GE(e.successes, 26);
+  EXPECT_GE(e.successes, 29);
   EXPECT_LE(median(e.errors_deg), 0.75);
 
   for (RobustMethod method : {RobustMethod::kRansac, RobustMethod::kUsacMagsac}) {
@@ -121,7 +121,7 @@ TEST(SparusRegistration, MedianRotationErrorOfPairs1_3_6ApartAndRobustEstimators
                 method == RobustMethod::kRansac ? "RANSAC" : "USAC-MAGSAC", other.successes,
                 median(other.errors_deg), median(other.inliers), other.pair_ms);
     // The comparison is reported; each estimator must still register the overlapping pairs.
-    EXPECT_GE(other.successes, 15);
+    EXPECT_GE(other.successes, 27);
   }
 }
 

@@ -37,11 +37,13 @@ struct RegistrationOptions {
   MatchingOptions matching;
   PccsOptions pccs;
   EssentialOptions essential;
-  /// Refinement; its parallax floor is below EssentialOptions::min_parallax_px, which decides
-  /// pure rotation (slow survey pairs with ~0.1 deg parallax still measure the rotation).
+  /// Refinement. Its pure-rotation floor is set to EssentialOptions::min_parallax_px (0.5
+  /// sigma = 0.25 px) rather than 3 sigma: slow survey pairs (Sparus consecutive frames, median
+  /// derotated parallax ~0.6 px) still measure the rotation well, and their weakly observed
+  /// baseline direction shows in the 5x5 covariance instead of a rejection.
   TwoViewRefinementOptions refinement = [] {
     TwoViewRefinementOptions o;
-    o.min_parallax_sigma = 0.25;  // 0.125 px at the default 0.5 px sigma
+    o.min_parallax_sigma = 0.5;
     return o;
   }();
   ValidationOptions validation;
