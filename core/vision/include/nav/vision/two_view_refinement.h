@@ -1,0 +1,115 @@
+#pragma once
+// Two-view maximum-likelihood refinement of the 5-DOF relative pose with its covariance
+// (Eustice et al., RSS 2005, section III-C; Hartley & Zisserman, 2nd ed., sections 11.4.1 and
+// A6.3 (sparse Levenberg-Marquardt); Triggs et al., "Bundle adjustment - a modern synthesis",
+// 2000, section 6.1 (Schur complement) and 9 (gauge)).
+//
+// Unknowns: the pose z = [azimuth, elevation, roll, pitch, heading] of camera j in camera i
+// (relative_pose_5dof.h) and one 3-D point X_k per match in camera i's frame, with the baseline
+// fixed to unit length (the scale gauge: depths come out in baseline units). Camera i sits at
+// the origin. Cost (pixel_sigma_px = s the isotropic feature noise, rho the Huber loss):
+//   sum_k rho(|u_i,k - pi(K X_k)|^2 / s^2) + rho(|u_j,k - pi(K R^T (X_k - t_unit(z)))|^2 / s^2)
+// minimised by Levenberg-Marquardt with the 3x3 point blocks eliminated (Schur complement) at
+// every iteration, robust weights by iteratively reweighted least squares (Triggs section 3.3).
+// The solver works in inverse-depth points (finite for distant points) and updates the unit
+// baseline on its tangent plane (no pole where it points along the optical axis); each accepted
+// step is followed by point-only Gauss-Newton steps (two_view_problem.h).
+// Stops on a small relative cost decrease, a small step, or a pose step below
+// pose_step_tolerance_sigma standard deviations (S-norm of the step). Then matches with a
+// residual beyond the Huber kink in either image are rejected and the rest re-solved (up to
+// three rounds), as are matches whose point ends behind a camera (a distant point may cross
+// infinity within its noise), so the final solution and its information have unit weights: with
+// gross mismatches the robust loss alone crawls (their points drift along a flat valley of the
+// cost) and would leave down-weighted terms in the covariance.
+// Points start from the linear (DLT) triangulation with the initial (R_i_j, t_unit).
+//
+// Covariance: at the solution, the inverse of the Schur complement
+//   S = H_pp - sum_k H_pk H_kk^-1 H_kp
+// of the information H = J^T J of the whitened residuals of the kept matches (all inside the
+// Huber kink, so unit weights) in the solver's pose parameters p, mapped to z by dz/dp: the
+// 3-D points are marginalised, equal to the top-left 5x5 block of the dense inverse of the
+// information in (z, points).
+//
+// Failures (converged == false, `reason` says why and with which numbers): fewer than
+// min_points usable matches; too many matches triangulating behind either camera; median
+// derotated parallax below min_parallax_sigma noise sigmas (pure rotation / zero baseline,
+// before and after the solve); more than max_fraction_outliers dropped after a solve;
+// non-finite or singular information (reciprocal condition of S below min_rcond); no
+// convergence within max_iterations.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "nav/vision/types.h"
+
+namespace nav::vision {
+
+struct TwoViewRefinementOptions {
+  double pixel_sigma_px = 0.5;              ///< Isotropic pixel noise of every feature, each axis.
+  double huber_threshold_sigma = 3.0;       ///< Huber kink in units of sigma (per residual pair).
+  int max_iterations = 200;                 ///< Per solve round; weak baselines take ~100.
+  double function_tolerance = 1e-8;         ///< Stop when relative cost decrease is below.
+  double parameter_tolerance = 1e-10;       ///< Stop when the step norm is below (radians/units).
+  double pose_step_tolerance_sigma = 1e-3;  ///< Stop when sqrt(dz^T S dz) is below.
+  int min_points = 8;                       ///< Fewest usable matches.
+  double max_fraction_behind = 0.5;         ///< Larger fraction of points behind a camera fails.
+  double max_fraction_outliers = 0.5;       ///< Larger fraction dropped after a solve fails.
+  /// Median derotated parallax (ray angle x mean focal length) below min_parallax_sigma x
+  /// pixel_sigma_px fails as pure rotation: under a pure rotation the derotated disparity of a
+  /// match is noise, Rayleigh with scale sqrt(2) sigma and median 1.67 sigma.
+  double min_parallax_sigma = 3.0;
+  double min_rcond = 1e-12;  ///< Smallest reciprocal condition of S.
+};
+
+/// Result of refine_two_view. Points, depths and pixel residuals are listed for the matches
+/// that were used (`used_matches`, indices into the caller's match list).
+struct TwoViewRefinement {
+  bool converged = false;
+  std::string reason;  ///< Why converged == false.
+  /// Failure class when !converged: kTooFewInliers when too few usable matches remain
+  /// (including after outlier rejection), otherwise kRefinementFailed.
+  RegistrationFailure failure = RegistrationFailure::kOk;
+  Vec5 z = Vec5::Zero();               ///< As nav::core::CameraRelativePoseModel measures it.
+  Mat5 covariance = Mat5::Identity();  ///< 5x5 covariance of z, points marginalised.
+  Eigen::Matrix3d R_i_j = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t_i_j_unit = Eigen::Vector3d::UnitX();
+  std::vector<int> used_matches;
+  std::vector<Eigen::Vector3d> points_i;  ///< X_k in camera i, baseline units.
+  std::vector<double> depths_i;           ///< z coordinate of X_k in camera i, baseline units.
+  std::vector<double> depths_j;           ///< z coordinate of X_k in camera j, baseline units.
+  double reprojection_rms_px = 0.0;       ///< RMS over all 4 * n residual components.
+  double initial_rms_px = 0.0;
+  double median_parallax_px = 0.0;  ///< Median triangulation angle x focal length.
+  /// A-posteriori pixel noise sqrt(RSS / (n - 5)) (reported; the covariance uses
+  /// pixel_sigma_px). Much smaller or larger than pixel_sigma_px: the noise model is off.
+  double residual_sigma_px = 0.0;
+  int iterations = 0;
+  int behind_camera = 0;      ///< Matches dropped behind a camera (initial DLT or after a solve).
+  int rejected_outliers = 0;  ///< Matches dropped beyond the Huber kink.
+};
+
+/// Refinement from pixel correspondences (undistorted pixels) and an initial pose.
+/// t_i_j_initial may have any non-zero length; only its direction is used.
+TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
+                                  const std::vector<Eigen::Vector2d>& u_j_px,
+                                  const CameraIntrinsics& camera,
+                                  const Eigen::Matrix3d& R_i_j_initial,
+                                  const Eigen::Vector3d& t_i_j_initial,
+                                  const TwoViewRefinementOptions& options);
+
+/// Refinement of an essential-matrix estimate: the matches are estimate.inliers of `matches`
+/// (used_matches then index `matches.matches`). Fails when !estimate.ok.
+TwoViewRefinement refine_two_view(const ImageFeatures& i, const ImageFeatures& j,
+                                  const PutativeMatches& matches, const EssentialEstimate& estimate,
+                                  const CameraIntrinsics& camera,
+                                  const TwoViewRefinementOptions& options);
+
+/// Whitened residuals (divided by sigma, no robust loss) of the cost above, stacked per point
+/// as [u_i (2); u_j (2)]: 4 * n rows. For tests (numeric Jacobians, dense information) and
+/// diagnostics.
+Eigen::VectorXd two_view_residuals(const Vec5& z, const std::vector<Eigen::Vector3d>& points_i,
+                                   const std::vector<Eigen::Vector2d>& u_i_px,
+                                   const std::vector<Eigen::Vector2d>& u_j_px,
+                                   const CameraIntrinsics& camera, double pixel_sigma_px);
+
+}  // namespace nav::vision

@@ -1,0 +1,105 @@
+#pragma once
+// Private kernels of the two-view refinement (two_view_refinement.cpp; see
+// two_view_refinement.h for the problem). Not installed, not part of nav_vision's interface.
+//
+// Points are in inverse depth in camera i, p = (alpha, beta, rho) = (x/z, y/z, 1/z) (Civera,
+// Davison & Montiel, IEEE T-RO 24(5), 2008): camera i's projection is linear in p and camera
+// j's is that of the homogeneous point R_i_j^T (m - rho t), m = (alpha, beta, 1), finite for
+// distant points (rho -> 0) where a Euclidean X makes Gauss-Newton crawl along the depth.
+// The marginal covariance of z does not depend on the points' parametrisation.
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "nav/vision/relative_pose_5dof.h"
+#include "nav/vision/two_view_refinement.h"
+#include "nav/vision/types.h"
+
+namespace nav::vision::two_view {
+
+using Mat23 = Eigen::Matrix<double, 2, 3>;
+using Mat25 = Eigen::Matrix<double, 2, 5>;
+using Mat53 = Eigen::Matrix<double, 5, 3>;
+
+/// The pose while solving: Euler angles of R_i_j and the unit baseline t_i_j. Updated by a
+/// 5-vector delta = [b (2); d_rpy (3)], t <- normalise(t + B b) with B an orthonormal basis of
+/// t's tangent plane: unlike (azimuth, elevation) this has no singularity where the baseline
+/// points along the optical axis (forward or vertical motion), where the solve would crawl.
+struct PoseState {
+  Eigen::Vector3d rpy = Eigen::Vector3d::Zero();
+  Eigen::Vector3d t = Eigen::Vector3d::UnitX();
+};
+
+/// Orthonormal 3x2 basis of the plane orthogonal to the unit vector t.
+Mat3x2 tangent_basis(const Eigen::Vector3d& t);
+PoseState pose_from_z(const Vec5& z);
+PoseState retract(const PoseState& x, const Vec5& delta);
+
+/// Pose-dependent quantities shared by every point.
+struct PoseTerms {
+  Eigen::Matrix3d R_j_i;                  ///< R_i_j^T
+  std::array<Eigen::Matrix3d, 3> dR_j_i;  ///< d(R_i_j^T) / d(roll, pitch, heading)
+  Eigen::Vector3d t;                      ///< Unit baseline t_i_j.
+  Mat3x2 B;                               ///< tangent_basis(t): d t / d b at b = 0.
+  explicit PoseTerms(const PoseState& x);
+};
+
+Eigen::Vector3d to_inverse_depth(const Eigen::Vector3d& X);
+Eigen::Vector3d from_inverse_depth(const Eigen::Vector3d& p);
+
+/// Whitened residuals of one point in both images, with Jacobians when asked (with respect to
+/// the inverse-depth point p and z).
+struct PointResidual {
+  Eigen::Vector2d r_i, r_j;
+  Mat23 J_i_p, J_j_p;
+  Mat25 J_j_z;
+};
+
+PointResidual point_residual(const PoseTerms& pose, const CameraIntrinsics& cam,
+                             const Eigen::Vector3d& p, const Eigen::Vector2d& u_i,
+                             const Eigen::Vector2d& u_j, double inv_sigma, bool jacobians);
+
+/// Linear triangulation (Hartley & Zisserman 12.2) in camera i (Euclidean) from normalised
+/// coordinates.
+Eigen::Vector3d triangulate(const Eigen::Vector2d& x_i, const Eigen::Vector2d& x_j,
+                            const Eigen::Matrix3d& R_j_i, const Eigen::Vector3d& t_i_j);
+
+/// Normal equations of the (robust) whitened problem: pose block, point blocks, couplings.
+struct NormalEquations {
+  Mat5 H_zz = Mat5::Zero();
+  Vec5 g_z = Vec5::Zero();
+  std::vector<Eigen::Matrix3d> H_kk;
+  std::vector<Mat53> H_zk;
+  std::vector<Eigen::Vector3d> g_k;
+  double cost = 0.0;  // sum of rho
+};
+
+/// Schur complement S = H_zz - sum H_zk H_kk^-1 H_kz (with damping lambda on every diagonal,
+/// Marquardt scaling) and the reduced right-hand side; false when a point block is singular.
+bool schur(const NormalEquations& ne, double lambda, Mat5& S, Vec5& b,
+           std::vector<Eigen::Matrix3d>& H_kk_inv);
+
+/// Result of one Levenberg-Marquardt run.
+struct LmOutcome {
+  int iterations = 0;
+  bool converged = false;
+  double last_relative_decrease = 1.0;
+  std::string error;  // non-empty: numerical failure
+};
+
+/// Sparse Levenberg-Marquardt (Hartley & Zisserman A6.3) from (x, p) with Huber kink c (in
+/// sigmas); `ne` returns the normal equations (in delta, see PoseState) at the final (x, p).
+LmOutcome levenberg_marquardt(PoseState& x, std::vector<Eigen::Vector3d>& p,
+                              const std::vector<Eigen::Vector2d>& ui,
+                              const std::vector<Eigen::Vector2d>& uj, const CameraIntrinsics& cam,
+                              double inv_sigma, double c, const TwoViewRefinementOptions& opt,
+                              NormalEquations& ne);
+
+/// Whitened residuals [r_i; r_j] per point (no robust loss) of inverse-depth points.
+Eigen::VectorXd stacked_residuals(const PoseState& x, const std::vector<Eigen::Vector3d>& p,
+                                  const std::vector<Eigen::Vector2d>& u_i,
+                                  const std::vector<Eigen::Vector2d>& u_j,
+                                  const CameraIntrinsics& cam, double inv_sigma);
+
+}  // namespace nav::vision::two_view

@@ -1,0 +1,172 @@
+// Radiometric preprocessing on real frames (illumination flatness and local contrast before
+// and after) and its rejection of bad input.
+#include "nav/vision/preprocess.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "nav/testing/data.h"
+
+namespace nav::vision {
+namespace {
+
+CameraIntrinsics sparus_camera() {
+  CameraIntrinsics c;
+  c.fx_px = 405.6384738851233;
+  c.fy_px = 405.588335378204;
+  c.cx_px = 189.9054317917407;
+  c.cy_px = 139.9149578253755;
+  c.k1 = -0.3670656233416921;
+  c.k2 = 0.203001968694465;
+  c.p1 = 0.003336917744124004;
+  c.p2 = -0.000487426354679637;
+  c.width_px = 384;
+  c.height_px = 288;
+  return c;
+}
+
+/// A strobe-like falloff: 1 at (0.3 w, 0.4 h), falling as a Gaussian to ~0.2 at the far corner.
+cv::Mat falloff(cv::Size size) {
+  cv::Mat f(size, CV_32F);
+  for (int r = 0; r < size.height; ++r) {
+    for (int c = 0; c < size.width; ++c) {
+      const double dx = (c - 0.3 * size.width) / size.width;
+      const double dy = (r - 0.4 * size.height) / size.width;
+      f.at<float>(r, c) = static_cast<float>(std::exp(-(dx * dx + dy * dy) / 0.35));
+    }
+  }
+  return f;
+}
+
+/// Real frame as a 12-bit strobe-lit frame: grey x falloff, scaled to 0..4095 in CV_16U.
+cv::Mat as_12bit_strobe_frame(const cv::Mat& bgr) {
+  cv::Mat grey, f;
+  cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
+  grey.convertTo(f, CV_32F, 1.0 / 255.0);
+  f = f.mul(falloff(f.size()));
+  cv::Mat out;
+  f.convertTo(out, CV_16U, 4095.0);
+  return out;
+}
+
+std::vector<cv::Mat> sparus_frames(const std::filesystem::path& first, int count) {
+  std::vector<cv::Mat> frames;
+  for (int k = 1; k <= count; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%02d.png", k);
+    frames.push_back(cv::imread((first.parent_path() / name).string(), cv::IMREAD_UNCHANGED));
+  }
+  return frames;
+}
+
+TEST(Preprocess, RealFrameBecomesFlatterAndMoreContrasted) {
+  NAV_REQUIRE_DATA(path, "images/sparus/frame_01.png");
+  const cv::Mat raw = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+  ASSERT_FALSE(raw.empty());
+  cv::Mat out;
+  const Preprocessor pre(sparus_camera(), PreprocessOptions{});
+  ASSERT_TRUE(pre.run(raw, &out).ok());
+  EXPECT_EQ(out.type(), CV_8UC1);
+  EXPECT_EQ(out.size(), raw.size());
+  cv::Mat grey;
+  cv::cvtColor(raw, grey, cv::COLOR_BGR2GRAY);
+  const double flat_before = illumination_flatness(grey, 4), flat_after = illumination_flatness(out, 4);
+  const double contrast_before = mean_local_contrast(grey), contrast_after = mean_local_contrast(out);
+  std::printf("Sparus frame_01: flatness %.3f -> %.3f, local contrast %.3f -> %.3f\n", flat_before,
+              flat_after, contrast_before, contrast_after);
+  EXPECT_LT(flat_after, 0.6 * flat_before);
+  EXPECT_GT(contrast_after, 1.4 * contrast_before);
+}
+
+TEST(Preprocess, TwelveBitStrobeFalloffIsRemovedByLowPassAndByRunningMean) {
+  NAV_REQUIRE_DATA(path, "images/sparus/frame_01.png");
+  const std::vector<cv::Mat> frames = sparus_frames(path, 22);
+  std::vector<cv::Mat> frames12;
+  for (const cv::Mat& f : frames) frames12.push_back(as_12bit_strobe_frame(f));
+  IlluminationMean mean;
+  for (const cv::Mat& f : frames12) ASSERT_TRUE(mean.add(f, 12).ok());
+  EXPECT_EQ(mean.frames(), 22u);
+
+  PreprocessOptions options;
+  options.undistort = false;
+  cv::Mat unit8;
+  frames12[5].convertTo(unit8, CV_8U, 255.0 / 4095.0);
+  const double raw_flatness = illumination_flatness(unit8, 4);
+  for (auto mode : {IlluminationCompensation::kLowPass, IlluminationCompensation::kRunningMean}) {
+    options.illumination = mode;
+    const Preprocessor pre(sparus_camera(), options);
+    cv::Mat out;
+    const core::Status s = pre.run(frames12[5], &out, &mean);
+    ASSERT_TRUE(s.ok()) << s.message();
+    const double flat = illumination_flatness(out, 4);
+    std::printf("12-bit strobe frame, mode %d: flatness %.3f -> %.3f\n", static_cast<int>(mode),
+                raw_flatness, flat);
+    EXPECT_LT(flat, 0.3 * raw_flatness);
+  }
+  // Without compensation the falloff survives the stretch (CLAHE only evens it partly).
+  options.illumination = IlluminationCompensation::kNone;
+  options.clahe_clip_limit = 0.0;
+  cv::Mat out;
+  ASSERT_TRUE(Preprocessor(sparus_camera(), options).run(frames12[5], &out).ok());
+  EXPECT_GT(illumination_flatness(out, 4), 0.5 * raw_flatness);
+}
+
+TEST(Preprocess, BadInputIsRejectedWithAClearMessage) {
+  const CameraIntrinsics camera = sparus_camera();
+  const Preprocessor pre(camera, PreprocessOptions{});
+  cv::Mat out;
+  auto message = [&](const cv::Mat& raw) {
+    const core::Status s = pre.run(raw, &out);
+    EXPECT_FALSE(s.ok());
+    return s.message();
+  };
+  EXPECT_NE(message(cv::Mat()).find("empty"), std::string::npos);
+  EXPECT_NE(message(cv::Mat(288, 384, CV_32F, cv::Scalar(0.5))).find("neither 8-bit"),
+            std::string::npos);
+  EXPECT_NE(message(cv::Mat(288, 384, CV_8UC4, cv::Scalar(1))).find("4 channels"),
+            std::string::npos);
+  EXPECT_NE(message(cv::Mat(100, 100, CV_8U, cv::Scalar(1))).find("calibration is for 384x288"),
+            std::string::npos);
+  // A 16-bit frame with 16 significant bits handed in as 12-bit data.
+  EXPECT_NE(message(cv::Mat(288, 384, CV_16U, cv::Scalar(40000))).find("wrong pixel depth"),
+            std::string::npos);
+
+  // Truncated raw buffer.
+  std::vector<std::uint8_t> buffer(384 * 288 * 2 - 10);
+  cv::Mat frame;
+  const core::Status truncated = frame_from_buffer(buffer.data(), buffer.size(), 384, 288, 2, &frame);
+  EXPECT_FALSE(truncated.ok());
+  EXPECT_NE(truncated.message().find("truncated"), std::string::npos) << truncated.message();
+  buffer.resize(384 * 288 * 2);
+  EXPECT_TRUE(frame_from_buffer(buffer.data(), buffer.size(), 384, 288, 2, &frame).ok());
+  EXPECT_EQ(frame.type(), CV_16UC1);
+
+  // Running mean requested without one, and a mean of another size.
+  PreprocessOptions running;
+  running.illumination = IlluminationCompensation::kRunningMean;
+  const Preprocessor pre_running(camera, running);
+  const cv::Mat ok_frame(288, 384, CV_16U, cv::Scalar(1000));
+  EXPECT_FALSE(pre_running.run(ok_frame, &out).ok());
+  IlluminationMean small;
+  ASSERT_TRUE(small.add(cv::Mat(10, 10, CV_16U, cv::Scalar(5)), 12).ok());
+  EXPECT_FALSE(small.add(ok_frame, 12).ok());
+  const core::Status mismatch = pre_running.run(ok_frame, &out, &small);
+  EXPECT_FALSE(mismatch.ok());
+  EXPECT_NE(mismatch.message().find("illumination mean is 10x10"), std::string::npos);
+
+  // Missing calibration: undistortion needs the intrinsics.
+  CameraIntrinsics missing = camera;
+  missing.fx_px = 0.0;
+  const core::Status no_calibration = Preprocessor(missing, PreprocessOptions{}).run(ok_frame, &out);
+  EXPECT_FALSE(no_calibration.ok());
+  EXPECT_NE(no_calibration.message().find("missing calibration"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace nav::vision

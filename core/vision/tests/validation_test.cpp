@@ -1,0 +1,169 @@
+// Tests of validation.h: the chi2(5) tail against tabulated values, a sound synthetic
+// registration passing with its chi2 against the prior distributed as chi2(5) over a Monte
+// Carlo, and every check failing with its code and a reason that names the numbers.
+
+#include "nav/vision/validation.h"
+
+#include <gtest/gtest.h>
+
+#include <iostream>
+#include <random>
+#include <stdexcept>
+
+#include "nav/vision/relative_pose_5dof.h"
+#include "synthetic_two_view.h"
+
+namespace nav::vision {
+namespace {
+
+using test::deg;
+
+constexpr double kSigmaPx = 0.5;
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+RelativePosePrior prior_at(const Vec6& mean) {
+  RelativePosePrior p;
+  p.x_i_j = mean;
+  p.covariance = test::default_prior_covariance();
+  p.scene_depth_m = 3.5;
+  p.scene_depth_sigma_m = 0.3;
+  return p;
+}
+
+TwoViewRefinement refined(std::mt19937& rng, const Vec6& x, int n = 100) {
+  const test::TwoViewScene s = test::make_scene(rng, x, n, 3.5, 0.3, kSigmaPx);
+  TwoViewRefinementOptions o;
+  o.pixel_sigma_px = kSigmaPx;
+  return refine_two_view(s.u_i, s.u_j, s.camera, core::pose_rotation(x), core::pose_translation(x),
+                         o);
+}
+
+TEST(Validation, Chi2FiveTailMatchesTables) {
+  // Quantiles of chi2 with 5 degrees of freedom (Abramowitz & Stegun, table 26.8).
+  EXPECT_NEAR(chi2_5_survival(11.0705), 0.05, 1e-5);
+  EXPECT_NEAR(chi2_5_survival(15.0863), 0.01, 1e-5);
+  EXPECT_NEAR(chi2_5_survival(20.5150), 0.001, 1e-6);
+  EXPECT_NEAR(chi2_5_survival(4.35146), 0.5, 1e-5);
+  EXPECT_NEAR(chi2_5_quantile(0.999), 20.5150, 1e-3);
+  EXPECT_DOUBLE_EQ(chi2_5_survival(0.0), 1.0);
+  EXPECT_THROW(chi2_5_quantile(1.0), std::invalid_argument);
+}
+
+TEST(Validation, SoundRegistrationPassesWithChi2AgainstThePrior) {
+  // Truth drawn from the prior: over 200 registrations the reported chi2 averages 5.
+  std::mt19937 rng(1);
+  const Mat6 P = test::default_prior_covariance();
+  double chi2_sum = 0.0;
+  const int trials = 200;
+  for (int k = 0; k < trials; ++k) {
+    const Vec6 x = test::default_x_i_j();
+    const RelativePosePrior prior = prior_at(x - test::draw(rng, P));
+    const TwoViewRefinement r = refined(rng, x);
+    RegistrationResult result;
+    validate_registration(r, &prior, ValidationOptions{}, result);
+    ASSERT_TRUE(result.success) << result.reason;
+    EXPECT_EQ(result.failure, RegistrationFailure::kOk);
+    EXPECT_TRUE(result.reason.empty());
+    EXPECT_EQ(result.inliers, static_cast<int>(r.used_matches.size()));
+    EXPECT_EQ(result.z, r.z);
+    chi2_sum += result.prior_chi2;
+  }
+  const double mean = chi2_sum / trials;
+  std::cout << "mean chi2(5) of z against the prior over " << trials << " trials: " << mean << "\n";
+  EXPECT_GT(mean, 4.2);
+  EXPECT_LT(mean, 5.9);
+}
+
+TEST(Validation, WithoutPriorNoChi2) {
+  std::mt19937 rng(2);
+  RegistrationResult result;
+  validate_registration(refined(rng, test::default_x_i_j()), nullptr, ValidationOptions{}, result);
+  EXPECT_TRUE(result.success) << result.reason;
+  EXPECT_EQ(result.prior_chi2, -1.0);
+}
+
+TEST(Validation, RefinementFailureKeepsItsCodeAndReason) {
+  std::mt19937 rng(3);
+  const TwoViewRefinement r = refined(rng, test::default_x_i_j(), 5);
+  ASSERT_FALSE(r.converged);
+  RegistrationResult result;
+  validate_registration(r, nullptr, ValidationOptions{}, result);
+  EXPECT_FALSE(result.success);
+  EXPECT_EQ(result.failure, RegistrationFailure::kTooFewInliers);
+  EXPECT_EQ(result.reason, r.reason);
+  TwoViewRefinement not_converged;
+  not_converged.reason = "no convergence";
+  validate_registration(not_converged, nullptr, ValidationOptions{}, result);
+  EXPECT_EQ(result.failure, RegistrationFailure::kRefinementFailed);
+}
+
+TEST(Validation, EachCheckFailsWithItsCode) {
+  std::mt19937 rng(4);
+  const Vec6 x = test::default_x_i_j();
+  const TwoViewRefinement good = refined(rng, x);
+  ASSERT_TRUE(good.converged) << good.reason;
+  const RelativePosePrior prior = prior_at(x);
+  RegistrationResult result;
+
+  ValidationOptions strict;
+  strict.min_inliers = 500;
+  validate_registration(good, &prior, strict, result);
+  EXPECT_EQ(result.failure, RegistrationFailure::kTooFewInliers);
+  EXPECT_TRUE(contains(result.reason, "fewer than the 500")) << result.reason;
+
+  strict = ValidationOptions{};
+  strict.max_reprojection_rms_px = 0.1;
+  validate_registration(good, &prior, strict, result);
+  EXPECT_EQ(result.failure, RegistrationFailure::kReprojectionError);
+  EXPECT_TRUE(contains(result.reason, "above the limit 0.1 px")) << result.reason;
+
+  TwoViewRefinement behind = good;
+  behind.depths_j[7] = -0.5;
+  validate_registration(behind, &prior, ValidationOptions{}, result);
+  EXPECT_EQ(result.failure, RegistrationFailure::kRefinementFailed);
+  EXPECT_TRUE(contains(result.reason, "1 behind camera j")) << result.reason;
+
+  // The prior puts the seafloor at 10 m: the triangulated 3.5 m is out of it.
+  RelativePosePrior deep = prior;
+  deep.scene_depth_m = 10.0;
+  validate_registration(good, &deep, ValidationOptions{}, result);
+  EXPECT_EQ(result.failure, RegistrationFailure::kDepthOutOfPrior);
+  EXPECT_TRUE(contains(result.reason, "scene-depth prior 10")) << result.reason;
+  // A baseline prior twice the truth scales every depth to 7 m: also out.
+  RelativePosePrior long_baseline = prior;
+  long_baseline.x_i_j.head<3>() *= 2.0;
+  validate_registration(good, &long_baseline, ValidationOptions{}, result);
+  EXPECT_EQ(result.failure, RegistrationFailure::kDepthOutOfPrior);
+
+  // Heading prior 10 deg off with a 0.5 deg sigma: chi2 large, reported; fails only gated.
+  RelativePosePrior off = prior;
+  off.x_i_j[5] += deg(10.0);
+  off.covariance(5, 5) = deg(0.5) * deg(0.5);
+  validate_registration(good, &off, ValidationOptions{}, result);
+  EXPECT_TRUE(result.success) << result.reason;
+  EXPECT_GT(result.prior_chi2, 100.0);
+  ValidationOptions gated;
+  gated.gate_prior_chi2 = true;
+  validate_registration(good, &off, gated, result);
+  EXPECT_FALSE(result.success);
+  EXPECT_EQ(result.failure, RegistrationFailure::kRefinementFailed);
+  EXPECT_TRUE(contains(result.reason, "disagrees with the prior")) << result.reason;
+
+  // A prior without a horizontal baseline predicts no azimuth.
+  RelativePosePrior vertical = prior;
+  vertical.x_i_j.head<3>() << 0.0, 0.0, 0.5;
+  validate_registration(good, &vertical, ValidationOptions{}, result);
+  EXPECT_EQ(result.failure, RegistrationFailure::kRefinementFailed);
+  EXPECT_TRUE(contains(result.reason, "prior unusable")) << result.reason;
+}
+
+TEST(Validation, FailureNames) {
+  EXPECT_EQ(failure_name(RegistrationFailure::kDepthOutOfPrior), "depth out of prior");
+  EXPECT_EQ(failure_name(RegistrationFailure::kOk), "ok");
+}
+
+}  // namespace
+}  // namespace nav::vision
