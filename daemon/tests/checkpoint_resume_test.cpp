@@ -28,12 +28,12 @@
 #include "nav/core/serialization/byte_io.h"
 #include "nav/core/serialization/map_codec.h"
 #include "nav/core/sim/survey.h"
-#include "nav/daemon/checkpoint.h"
-#include "nav/daemon/checkpoint_worker.h"
+#include "nav/daemon/checkpoint/checkpoint.h"
+#include "nav/daemon/checkpoint/checkpoint_worker.h"
 #include "nav/daemon/config.h"
-#include "nav/daemon/filter/nav_filter.h"
-#include "nav/daemon/filter/nav_filter_checkpoint.h"
-#include "nav/daemon/resume_point.h"
+#include "nav/daemon/filter/filter_options.h"
+#include "nav/daemon/checkpoint/nav_filter_checkpoint.h"
+#include "nav/daemon/checkpoint/resume_point.h"
 #include "support/synthetic_dive.h"
 
 namespace nav::daemon {
@@ -341,10 +341,10 @@ struct FilterDive {
     nav::testing::SyntheticDiveOptions o;
     o.duration_s = 120.0;
     dive = nav::testing::make_synthetic_dive(config, o);
-    options = NavFilterOptions::from_config(config);
+    options = filter_options_from_config(config);
   }
   std::unique_ptr<NavFilter> make() const {
-    return std::make_unique<NavFilter>(config, &dive.registrations, options);
+    return std::make_unique<NavFilter>(options, &dive.registrations);
   }
   NavdConfig config;
   nav::testing::SyntheticDive dive;

@@ -1,6 +1,6 @@
 // Checkpoints: CRC-32 against known vectors, atomic write + rotation, and loading the newest
 // valid checkpoint past truncated, bit-flipped, mis-named files and leftover temp files.
-#include "nav/daemon/checkpoint.h"
+#include "nav/daemon/checkpoint/checkpoint.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -11,7 +11,7 @@
 #include <string>
 #include <string_view>
 
-#include "nav/daemon/crc32.h"
+#include "nav/core/serialization/crc32.h"
 
 namespace nav::daemon {
 namespace {

@@ -10,7 +10,7 @@
 #include <map>
 
 #include "nav/daemon/config.h"
-#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/registration_inbox.h"
 #include "support/synthetic_dive.h"
 
@@ -47,7 +47,7 @@ std::vector<navlcm::registration_t> delayed(const SyntheticDive& dive) {
 }
 
 NavFilterOptions async_options(double wait_s, int max_pending = 256) {
-  NavFilterOptions o = NavFilterOptions::from_config(sim_config());
+  NavFilterOptions o = filter_options_from_config(sim_config());
   o.registration_wait_s = wait_s;
   o.max_pending_registrations = max_pending;
   return o;
@@ -56,7 +56,7 @@ NavFilterOptions async_options(double wait_s, int max_pending = 256) {
 /// Replay style: every registration in the table before the first measurement.
 std::unique_ptr<NavFilter> run_replay(const SyntheticDive& dive, const RegistrationTable& table,
                                       const NavFilterOptions& options) {
-  auto f = std::make_unique<NavFilter>(sim_config(), &table, options);
+  auto f = std::make_unique<NavFilter>(options, &table);
   for (const Measurement& m : dive.measurements) EXPECT_TRUE(f->process(m).ok());
   EXPECT_TRUE(f->finish().ok());
   return f;
@@ -64,7 +64,7 @@ std::unique_ptr<NavFilter> run_replay(const SyntheticDive& dive, const Registrat
 
 RegistrationTable table_of(const std::vector<navlcm::registration_t>& regs) {
   RegistrationTable t;
-  for (const auto& r : regs) t.insert(r);
+  for (const auto& r : regs) t.insert(registration_from_message(r));
   return t;
 }
 
@@ -157,7 +157,7 @@ TEST(AsyncLinks, LiveInsertionGivesTheLinksOfReplayForTheSameArrivalTimes) {
   std::sort(regs.begin(), regs.end(),
             [](const auto& a, const auto& b) { return a.utime < b.utime; });
   RegistrationInbox inbox(64);
-  NavFilter live(sim_config(), &inbox.table(), async_options(3.0));
+  NavFilter live(async_options(3.0), &inbox.table());
   navlcm::registration_t unknown = regs.front();
   unknown.frame_id_i = 1000;
   unknown.frame_id_j = 1001;
@@ -210,7 +210,7 @@ TEST(AsyncLinks, UnansweredPairsExpireAfterTheWait) {
 TEST(AsyncLinks, PendingSetIsBounded) {
   const SyntheticDive dive = dive_with_realtime();
   const RegistrationTable empty;
-  NavFilter f(sim_config(), &empty, async_options(1000.0, 3));
+  NavFilter f(async_options(1000.0, 3), &empty);
   std::size_t most = 0;
   for (const Measurement& m : dive.measurements) {
     ASSERT_TRUE(f.process(m).ok());

@@ -5,7 +5,7 @@
 // measurements ends bit-identical to the uninterrupted filter, link history and trajectory
 // included; every 11th truncation of the NAVF section is refused, a flipped byte (every 17th) is
 // refused or decodes to exactly those bytes, and a refused restore leaves the filter untouched.
-#include "nav/daemon/filter/nav_filter_checkpoint.h"
+#include "nav/daemon/checkpoint/nav_filter_checkpoint.h"
 
 #include <gtest/gtest.h>
 
@@ -15,9 +15,9 @@
 
 #include "nav/core/serialization/sections.h"
 #include "nav/daemon/config.h"
-#include "nav/daemon/filter/nav_filter.h"
-#include "nav/daemon/filter/nav_filter_checkpointer.h"
-#include "nav/daemon/resume_point.h"
+#include "nav/daemon/filter/filter_options.h"
+#include "nav/daemon/checkpoint/nav_filter_checkpointer.h"
+#include "nav/daemon/checkpoint/resume_point.h"
 #include "support/nav_filter_fixture.h"
 
 namespace nav::daemon {

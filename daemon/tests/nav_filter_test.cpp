@@ -9,8 +9,8 @@
 #include "nav/core/recovery/consistency.h"
 #include "nav/core/recovery/exact_marginals.h"
 #include "nav/daemon/config.h"
-#include "nav/daemon/filter/chi_square.h"
-#include "nav/daemon/filter/nav_filter.h"
+#include "nav/core/navigation/chi_square.h"
+#include "nav/daemon/filter/filter_options.h"
 #include "support/synthetic_dive.h"
 
 namespace nav::daemon {
@@ -29,9 +29,9 @@ DiveRun run_dive(const nav::testing::SyntheticDiveOptions& dive_options, bool li
   const NavdConfig config = sim_config();
   DiveRun run;
   run.dive = nav::testing::make_synthetic_dive(config, dive_options);
-  NavFilterOptions options = NavFilterOptions::from_config(config);
+  NavFilterOptions options = filter_options_from_config(config);
   options.propose_links = links;
-  run.filter = std::make_unique<NavFilter>(config, &run.dive.registrations, options);
+  run.filter = std::make_unique<NavFilter>(options, &run.dive.registrations);
   for (const Measurement& m : run.dive.measurements) {
     const core::Status s = run.filter->process(m);
     EXPECT_TRUE(s.ok()) << s.to_string();
@@ -153,7 +153,7 @@ TEST(NavFilter, MeasurementWorkDoesNotGrowWithTheMap) {
   o.duration_s = 40.0;
   const NavdConfig config = sim_config();
   const nav::testing::SyntheticDive dive = nav::testing::make_synthetic_dive(config, o);
-  NavFilter f(config, &dive.registrations, NavFilterOptions::from_config(config));
+  NavFilter f(filter_options_from_config(config), &dive.registrations);
   std::vector<int> dvl_blocks_written;
   for (const Measurement& m : dive.measurements) {
     ASSERT_TRUE(f.process(m).ok());
@@ -167,7 +167,7 @@ TEST(NavFilter, MeasurementWorkDoesNotGrowWithTheMap) {
 
 TEST(NavFilter, StartsAtTheFirstMeasurementAndCountsOutOfOrder) {
   const NavdConfig config = sim_config();
-  NavFilter f(config, nullptr, NavFilterOptions::from_config(config));
+  NavFilter f(filter_options_from_config(config), nullptr);
   DvlVelocity early;
   early.time.validity_us = 10;
   ASSERT_TRUE(f.process(early).ok());

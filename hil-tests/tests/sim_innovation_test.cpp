@@ -1,4 +1,4 @@
-// Innovation monitoring (nav/daemon/filter/innovation_stats.h) on simulated dives replayed
+// Innovation monitoring (nav/core/navigation/innovation_stats.h) on simulated dives replayed
 // through navd's path (daemon::run_replay): with the simulator's errors as the config models
 // them (white noise at the config sigmas, no biases), each sensor's mean NIS is near its
 // measurement dimension (within the band stated below); a depth sensor ten times noisier than
@@ -13,7 +13,7 @@
 #include <random>
 
 #include "nav/core/models/unary_models.h"
-#include "nav/daemon/filter/innovation_stats.h"
+#include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/replay/replay.h"
 #include "support/sim_dive.h"
 

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "nav/daemon/config.h"
-#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/filter/filter_options.h"
 #include "navd/solution_board.h"
 
 namespace lcm {

@@ -17,7 +17,7 @@
 #include <thread>
 
 #include "nav/daemon/config.h"
-#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/registration_inbox.h"
 
 namespace lcm {

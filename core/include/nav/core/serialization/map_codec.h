@@ -1,5 +1,5 @@
 #pragma once
-// Serialisation of the map for checkpoints (issue "navd" §6): the ESDF (Λ, η, μ) and the
+// Serialisation of the map for checkpoints: the ESDF (Λ, η, μ) and the
 // Algorithm 1 covariance bounds, as sections of the container of sections.h. Restoring gives
 // back objects whose every later operation is bit-identical to the original's: all doubles are
 // stored as their bit patterns and Λ's block rows keep their storage order (the order in which

@@ -16,7 +16,7 @@
 #include <thread>
 #include <vector>
 
-#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/measurement.h"
 
 namespace nav::daemon {

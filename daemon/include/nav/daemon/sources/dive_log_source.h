@@ -25,7 +25,7 @@
 
 #include "nav/daemon/config.h"
 #include "nav/daemon/measurement_queue.h"
-#include "nav/daemon/registration_table.h"
+#include "nav/daemon/filter/registration_message.h"
 #include "nav/daemon/sources/sensor_decoder.h"
 
 namespace nav::daemon {
