@@ -220,8 +220,8 @@ TEST(AsyncLinks, PendingSetIsBounded) {
   EXPECT_EQ(f.pending_counters().deferred, 3u);
   EXPECT_GT(f.pending_counters().dropped_full, 0u);
   EXPECT_EQ(f.pending_registrations().back().sequence, 3u);
-  EXPECT_THROW((NavFilter{sim_config(), &empty, async_options(-1.0)}), std::invalid_argument);
-  EXPECT_THROW((NavFilter{sim_config(), &empty, async_options(1.0, 0)}), std::invalid_argument);
+  EXPECT_THROW((NavFilter{async_options(-1.0), &empty}), std::invalid_argument);
+  EXPECT_THROW((NavFilter{async_options(1.0, 0), &empty}), std::invalid_argument);
 }
 
 TEST(RegistrationInbox, KeepsTheFirstAnswerCountsInvalidAndDrops) {

@@ -1,7 +1,7 @@
 // NavFilter on a synthetic dive with known truth (support/synthetic_dive.h): estimate within its
 // covariance, loop closures proposed from the bounds and accepted, a gross outlier gated,
 // bounds conservative against exact marginals, dead reckoning looser than SLAM, O(1) work per
-// measurement; and the chi-square gate conversion.
+// measurement.
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
@@ -9,7 +9,6 @@
 #include "nav/core/recovery/consistency.h"
 #include "nav/core/recovery/exact_marginals.h"
 #include "nav/daemon/config.h"
-#include "nav/core/navigation/chi_square.h"
 #include "nav/daemon/filter/filter_options.h"
 #include "support/synthetic_dive.h"
 
@@ -51,16 +50,6 @@ double xy_nees(const core::Esdf& esdf, const core::ExactMarginals& exact, int bl
   const Eigen::Matrix2d P = exact.marginal(block).topLeftCorner<2, 2>();
   (void)esdf;
   return e.dot(P.ldlt().solve(e));
-}
-
-TEST(ChiSquare, MatchesTablesAndConvertsTheSixDofGate) {
-  EXPECT_NEAR(chi_square_quantile(0.99, 6), 16.812, 1e-3);
-  EXPECT_NEAR(chi_square_quantile(0.99, 5), 15.086, 1e-3);
-  EXPECT_NEAR(chi_square_quantile(0.95, 1), 3.841, 1e-3);
-  EXPECT_NEAR(chi_square_quantile(0.99, 2), 9.210, 1e-3);
-  EXPECT_NEAR(chi_square_cdf(2.0, 2), 1.0 - std::exp(-1.0), 1e-14);
-  EXPECT_NEAR(equivalent_chi_square_gate(16.81, 6, 5), 15.08, 0.01);
-  EXPECT_THROW(chi_square_cdf(1.0, 0), std::invalid_argument);
 }
 
 TEST(NavFilter, TracksTruthWithinItsCovarianceAndClosesTheLoop) {

@@ -1,13 +1,13 @@
 // iterated_link_point (link_linearisation.h): the point at which NavFilter linearises an
 // accepted camera link.
-#include "nav/daemon/filter/link_linearisation.h"
+#include "nav/core/navigation/link_linearisation.h"
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
 #include <cmath>
 
-namespace nav::daemon {
+namespace nav::core {
 namespace {
 
 struct Scene {
@@ -69,4 +69,4 @@ TEST(LinkLinearisation, AMeanMetresOffIsPulledOntoTheMeasuredBearing) {
 }
 
 }  // namespace
-}  // namespace nav::daemon
+}  // namespace nav::core
