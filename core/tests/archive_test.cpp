@@ -80,9 +80,9 @@ Status read(const Bytes& bytes, Everything* out) {
 TEST(Archive, EveryFieldKindRoundTripsBitIdentically) {
   const Everything e = sample();
   const Bytes bytes = to_bytes(e);
-  // bool 1 + int 8 + i64 8 + u16 8 + u64 8 + f64 8 + 6 f64 + 3 bools + count 4 + items.
+  // bool 1 + int 8 + i64 8 + u16 4 + u64 8 + f64 8 + 6 f64 + 3 bools + count 4 + items.
   const std::size_t items = (1 + 4) + (1 + 8 + 4 + 9);
-  EXPECT_EQ(bytes.size(), 1 + 8 + 8 + 8 + 8 + 8 + 48 + 3 + 4 + items);
+  EXPECT_EQ(bytes.size(), 1 + 8 + 8 + 4 + 8 + 8 + 48 + 3 + 4 + items);
   Everything back;
   ASSERT_TRUE(read(bytes, &back).ok());
   EXPECT_EQ(to_bytes(back), bytes);
@@ -124,7 +124,7 @@ TEST(Archive, OutOfRangeAndMalformedValuesNameTheField) {
   EXPECT_NE(s.message().find("small"), std::string::npos) << s.message();
   // A count of 2^32 - 1 items runs out of bytes instead of allocating for them.
   bad = bytes;
-  const std::size_t count_at = 1 + 8 + 8 + 8 + 8 + 8 + 48 + 3;
+  const std::size_t count_at = 1 + 8 + 8 + 4 + 8 + 8 + 48 + 3;
   for (std::size_t k = 0; k < 4; ++k) bad[count_at + k] = 0xFF;
   s = read(bad, &back);
   EXPECT_FALSE(s.ok());

@@ -5,8 +5,9 @@
 // WriteArchive appends the fields with ByteWriter; ReadArchive reads them back with ByteReader
 // into the same fields, in the same order, so writer and reader cannot disagree.
 //
-// Encoding (little-endian, byte_io.h): bool as one byte 0/1; signed integers as i64 and
-// unsigned ones as u64 (range-checked against the field's type on reading); double as its
+// Encoding (little-endian, byte_io.h): bool as one byte 0/1; signed integers as i64; unsigned
+// ones by width: 1 byte as u8, up to 4 bytes as u32, wider as u64 (range-checked against the
+// field's type on reading); double as its
 // IEEE-754 bit pattern (finite on reading); fixed-size Eigen matrices as their values
 // column-major; std::array as its elements; std::vector as a u32 count then the elements (read one by one, so a corrupt
 // count runs out of bytes instead of allocating); std::optional as a presence byte then the
@@ -44,6 +45,13 @@ class WriteArchive {
   void matrix(Eigen::MatrixXd& m, Eigen::Index, Eigen::Index, bool, const char*) {
     w_.matrix(m);
   }
+  /// The values of an already-sized dynamic matrix or vector (no shape).
+  template <class M>
+  void values(M& m, const char*) {
+    w_.values(m);
+  }
+  /// Reader only: `count` items of at least min_item_bytes each must still fit.
+  bool check_count(std::uint64_t, std::size_t, const char*) { return true; }
   bool check(bool, const std::string&) { return true; }
   bool ok() const { return true; }
   Status status() const { return Status::Ok(); }
@@ -70,6 +78,16 @@ class ReadArchive {
   void matrix(Eigen::MatrixXd& m, Eigen::Index rows, Eigen::Index cols, bool allow_empty,
               const char* field) {
     if (status_.ok()) status_ = r_.matrix(&m, rows, cols, allow_empty, field);
+  }
+  /// The values of an already-sized dynamic matrix or vector (no shape); entries finite.
+  template <class M>
+  void values(M& m, const char* field) {
+    if (status_.ok()) status_ = r_.values(&m, field);
+  }
+  /// `count` items of at least min_item_bytes each must still fit (before allocating them).
+  bool check_count(std::uint64_t count, std::size_t min_item_bytes, const char* field) {
+    if (status_.ok()) status_ = r_.check_count(count, min_item_bytes, field);
+    return status_.ok();
   }
   /// Records `message` as the error (at the current offset) unless `condition`.
   bool check(bool condition, const std::string& message) {
@@ -118,6 +136,10 @@ void WriteArchive::write(T& value) {
     w_.u8(value ? 1 : 0);
   } else if constexpr (std::is_integral_v<T> && std::is_signed_v<T>) {
     w_.i64(static_cast<std::int64_t>(value));
+  } else if constexpr (std::is_integral_v<T> && sizeof(T) == 1) {
+    w_.u8(static_cast<std::uint8_t>(value));
+  } else if constexpr (std::is_integral_v<T> && sizeof(T) <= 4) {
+    w_.u32(static_cast<std::uint32_t>(value));
   } else if constexpr (std::is_integral_v<T>) {
     w_.u64(static_cast<std::uint64_t>(value));
   } else if constexpr (std::is_same_v<T, double>) {
@@ -155,6 +177,16 @@ void ReadArchive::read(T& value, const char* field) {
     std::int64_t v = 0;
     if ((status_ = r_.i64(&v, field)).ok() &&
         check(v >= std::numeric_limits<T>::min() && v <= std::numeric_limits<T>::max(),
+              std::string(field) + " " + std::to_string(v) + " out of range")) {
+      value = static_cast<T>(v);
+    }
+  } else if constexpr (std::is_integral_v<T> && sizeof(T) == 1) {
+    std::uint8_t v = 0;
+    if ((status_ = r_.u8(&v, field)).ok()) value = static_cast<T>(v);
+  } else if constexpr (std::is_integral_v<T> && sizeof(T) <= 4) {
+    std::uint32_t v = 0;
+    if ((status_ = r_.u32(&v, field)).ok() &&
+        check(v <= std::numeric_limits<T>::max(),
               std::string(field) + " " + std::to_string(v) + " out of range")) {
       value = static_cast<T>(v);
     }

@@ -19,6 +19,8 @@
 //   StateRecovery carries between solves; its preconditioner is refactored every solve):
 //   u32 d, matrix (n*d) x (1 + d).
 // (matrix = u32 rows, u32 cols, values; values = doubles column-major, little-endian.)
+// Each layout is written and read by ONE serialize function per type (map_serialization.h,
+// archive.h), so encoder and decoder cannot disagree.
 //
 // Decoding checks every size against the bytes present before allocating, every index range,
 // that the two stored halves of Λ are exact transposes and the diagonal blocks exactly

@@ -28,7 +28,7 @@
 
 namespace nav::daemon {
 
-inline constexpr std::uint32_t kNavFilterPayloadVersion = 1;
+inline constexpr std::uint32_t kNavFilterPayloadVersion = 2;  // 2: NAVF v4
 /// "IDNT": what the checkpointed filter was fed (e.g. the replayed dive log), so that a
 /// checkpoint of another input is never resumed.
 inline constexpr std::uint32_t kInputIdentitySectionTag = core::section_tag("IDNT");
