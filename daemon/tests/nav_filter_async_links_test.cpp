@@ -1,4 +1,4 @@
-// NavFilter with asynchronous registrations (nav_filter.h "Asynchronous registrations"): a
+// NavFilter with asynchronous registrations (nav/core/navigation/pending_registrations.h): a
 // registration available at the image is used there; one arriving later is applied between the
 // two delayed states; unanswered pairs expire; the pending set is bounded; and a table filled
 // while the filter runs (live mode: RegistrationInbox, registration_inbox.h) gives exactly the

@@ -9,6 +9,39 @@
 #include "nav/core/serialization/map_serialization.h"
 
 namespace nav::core {
+namespace {
+
+/// A state recovery's warm start [μ | Σ_{*r}] both ways: u32 block_dim, u32 rows, u32 cols,
+/// values. Reading requires the recovery's block_dim and at most `num_blocks` blocks (the warm
+/// start may lag the filter, never lead it).
+template <class Archive>
+void serialize_warm_start(Archive& ar, int block_dim, int num_blocks, Eigen::MatrixXd& X) {
+  auto dim = static_cast<std::uint32_t>(block_dim);
+  ar(dim, "block_dim");
+  if (!ar.check(dim == static_cast<std::uint32_t>(block_dim),
+                "block_dim " + std::to_string(dim) + ", the recovery has " +
+                    std::to_string(block_dim))) {
+    return;
+  }
+  auto rows = static_cast<std::uint32_t>(X.rows());
+  auto cols = static_cast<std::uint32_t>(X.cols());
+  ar(rows, "warm start rows");
+  ar(cols, "warm start columns");
+  const auto d = static_cast<std::uint32_t>(block_dim);
+  if (!ar.check(cols == d + 1 && rows % d == 0 &&
+                    rows <= static_cast<std::uint64_t>(num_blocks) * std::uint64_t{d},
+                "warm start is " + std::to_string(rows) + "x" + std::to_string(cols) +
+                    ", expected at most " + std::to_string(num_blocks) + " blocks of " +
+                    std::to_string(d) + " rows x " + std::to_string(d + 1))) {
+    return;
+  }
+  if (!ar.check_count(std::uint64_t{rows} * cols, 8, "warm start")) return;
+  if constexpr (Archive::kReading) X.resize(rows, cols);
+  ar.values(X, "warm start");
+}
+
+}  // namespace
+
 
 std::vector<std::uint8_t> encode_esdf(const Esdf& filter) {
   WriteArchive ar;

@@ -1,24 +1,38 @@
-// Checkpoint file format: header encode / verify. Layout in nav/daemon/checkpoint.h.
+// Checkpoint file format: header encode / verify. Layout in nav/daemon/checkpoint/checkpoint.h.
 #include <algorithm>
-#include <cstring>
+#include <array>
 #include <iterator>
 
-#include "nav/daemon/checkpoint/checkpoint.h"
+#include "nav/core/serialization/archive.h"
 #include "nav/core/serialization/crc32.h"
+#include "nav/daemon/checkpoint/checkpoint.h"
 
 namespace nav::daemon {
 namespace {
 
-constexpr char kMagic[8] = {'N', 'A', 'V', 'D', 'C', 'K', 'P', 'T'};
+constexpr std::array<std::uint8_t, 8> kMagic = {'N', 'A', 'V', 'D', 'C', 'K', 'P', 'T'};
+constexpr std::size_t kHeaderCrcOffset = 36;  // the header CRC covers the bytes before it
 
-void put_le(std::vector<std::uint8_t>& out, std::size_t offset, std::uint64_t value, int bytes) {
-  for (int i = 0; i < bytes; ++i) out[offset + i] = static_cast<std::uint8_t>(value >> (8 * i));
-}
+/// The 40-byte file header (the layout in checkpoint.h), written and read by one function.
+struct Header {
+  std::array<std::uint8_t, 8> magic{};
+  std::uint32_t format_version = 0;
+  std::uint32_t payload_version = 0;
+  std::uint64_t sequence = 0;
+  std::uint64_t payload_length = 0;
+  std::uint32_t payload_crc = 0;
+  std::uint32_t header_crc = 0;
+};
 
-std::uint64_t get_le(std::span<const std::uint8_t> bytes, std::size_t offset, int n) {
-  std::uint64_t value = 0;
-  for (int i = 0; i < n; ++i) value |= std::uint64_t{bytes[offset + i]} << (8 * i);
-  return value;
+template <class Archive>
+void serialize(Archive& ar, Header& h) {
+  ar(h.magic, "magic");
+  ar(h.format_version, "format version");
+  ar(h.payload_version, "payload version");
+  ar(h.sequence, "sequence");
+  ar(h.payload_length, "payload length");
+  ar(h.payload_crc, "payload CRC-32");
+  ar(h.header_crc, "header CRC-32");
 }
 
 std::optional<Checkpoint> reject(std::string* reason, std::string text) {
@@ -30,15 +44,19 @@ std::optional<Checkpoint> reject(std::string* reason, std::string text) {
 
 std::vector<std::uint8_t> encode_checkpoint(std::uint32_t payload_version, std::uint64_t sequence,
                                             std::span<const std::uint8_t> payload) {
+  Header h;
+  h.magic = kMagic;
+  h.format_version = kCheckpointFormatVersion;
+  h.payload_version = payload_version;
+  h.sequence = sequence;
+  h.payload_length = payload.size();
+  h.payload_crc = core::crc32(payload);
+  const std::vector<std::uint8_t> unsigned_header = core::to_bytes(h);
+  h.header_crc = core::crc32(std::span(unsigned_header).first(kHeaderCrcOffset));
+  const std::vector<std::uint8_t> header = core::to_bytes(h);
   // Sized once and filled by index (GCC 12 -O3 misreports inserts after reserve()).
   std::vector<std::uint8_t> out(kCheckpointHeaderBytes + payload.size(), 0);
-  std::copy(std::begin(kMagic), std::end(kMagic), out.begin());
-  put_le(out, 8, kCheckpointFormatVersion, 4);
-  put_le(out, 12, payload_version, 4);
-  put_le(out, 16, sequence, 8);
-  put_le(out, 24, payload.size(), 8);
-  put_le(out, 32, core::crc32(payload), 4);
-  put_le(out, 36, core::crc32(std::span(out).first(36)), 4);
+  std::copy(header.begin(), header.end(), out.begin());
   std::copy(payload.begin(), payload.end(), out.begin() + kCheckpointHeaderBytes);
   return out;
 }
@@ -49,17 +67,18 @@ std::optional<Checkpoint> decode_checkpoint(std::span<const std::uint8_t> bytes,
     return reject(reason, "truncated header: " + std::to_string(bytes.size()) + " of " +
                               std::to_string(kCheckpointHeaderBytes) + " bytes");
   }
-  if (std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0) {
-    return reject(reason, "not a navd checkpoint (bad magic)");
+  Header h;
+  core::ReadArchive ar(bytes.first(kCheckpointHeaderBytes), "checkpoint header");
+  ar(h, "header");
+  if (!ar.finish().ok()) return reject(reason, ar.finish().message());
+  if (h.magic != kMagic) return reject(reason, "not a navd checkpoint (bad magic)");
+  if (core::crc32(bytes.first(kHeaderCrcOffset)) != h.header_crc) {
+    return reject(reason, "header CRC-32 mismatch");
   }
-  const auto header_crc = static_cast<std::uint32_t>(get_le(bytes, 36, 4));
-  if (core::crc32(bytes.first(36)) != header_crc) return reject(reason, "header CRC-32 mismatch");
-  const auto format = static_cast<std::uint32_t>(get_le(bytes, 8, 4));
-  if (format != kCheckpointFormatVersion) {
-    return reject(reason, "unsupported format version " + std::to_string(format));
+  if (h.format_version != kCheckpointFormatVersion) {
+    return reject(reason, "unsupported format version " + std::to_string(h.format_version));
   }
-  const std::uint64_t length = get_le(bytes, 24, 8);
-  const std::uint64_t expected = kCheckpointHeaderBytes + length;
+  const std::uint64_t expected = kCheckpointHeaderBytes + h.payload_length;
   if (bytes.size() < expected) {
     return reject(reason, "truncated: " + std::to_string(bytes.size()) + " of " +
                               std::to_string(expected) + " bytes");
@@ -69,12 +88,10 @@ std::optional<Checkpoint> decode_checkpoint(std::span<const std::uint8_t> bytes,
                               std::to_string(expected));
   }
   const std::span<const std::uint8_t> payload = bytes.subspan(kCheckpointHeaderBytes);
-  if (core::crc32(payload) != static_cast<std::uint32_t>(get_le(bytes, 32, 4))) {
-    return reject(reason, "payload CRC-32 mismatch");
-  }
+  if (core::crc32(payload) != h.payload_crc) return reject(reason, "payload CRC-32 mismatch");
   Checkpoint checkpoint;
-  checkpoint.payload_version = static_cast<std::uint32_t>(get_le(bytes, 12, 4));
-  checkpoint.sequence = get_le(bytes, 16, 8);
+  checkpoint.payload_version = h.payload_version;
+  checkpoint.sequence = h.sequence;
   checkpoint.payload.assign(payload.begin(), payload.end());
   return checkpoint;
 }

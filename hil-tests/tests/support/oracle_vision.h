@@ -34,7 +34,9 @@ class OracleVision {
  public:
   OracleVision(const daemon::NavdConfig& config, const std::filesystem::path& truth_csv,
                double altitude_m, lcm::LCM& lcm)
-      : models_(daemon::filter_options_from_config(config).sensors), rows_(nav::sim::test::read_csv(truth_csv)), lcm_(lcm) {
+      : models_(daemon::filter_options_from_config(config).sensors),
+        rows_(nav::sim::test::read_csv(truth_csv)),
+        lcm_(lcm) {
     r_fp_m_ = altitude_m * models_.footprint_radius_per_altitude();
   }
   /// The player's time mapping (PlayerOptions::on_start; any thread).
