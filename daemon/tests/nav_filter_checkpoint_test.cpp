@@ -170,8 +170,10 @@ TEST(NavFilterCheckpointer, StopResumeAndSkipEndBitIdentical) {
   ASSERT_TRUE(writer.write(kNavFilterPayloadVersion + 1, Bytes{1, 2, 3}).ok);
   resumed = resume_nav_filter(dir, [&fx] { return fx.make(); });
   ASSERT_EQ(resumed.skipped.size(), 1u);
-  EXPECT_NE(resumed.skipped[0].reason.find("payload version 2, this navd reads 1"),
-            std::string::npos);
+  const std::string expected = "payload version " + std::to_string(kNavFilterPayloadVersion + 1) +
+                               ", this navd reads " + std::to_string(kNavFilterPayloadVersion);
+  EXPECT_NE(resumed.skipped[0].reason.find(expected), std::string::npos)
+      << resumed.skipped[0].reason;
   EXPECT_EQ(resumed.point.applied, ms.size());
   std::filesystem::remove_all(dir);
 }
