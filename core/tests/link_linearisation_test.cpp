@@ -15,7 +15,7 @@ struct Scene {
   LinkPair truth = LinkPair::Zero();  ///< [x_r; x_i]
   core::MeasCov R = core::MeasCov::Identity(5, 5) * 1e-6;
   Scene() {
-    camera.x_body_camera << 1.0, 0.0, 0.5, 0.0, 0.0, M_PI / 2;  // sim.yaml's mount
+    camera.x_body_camera << 1.0, 0.0, 0.5, 0.0, 0.0, M_PI / 2;  // the simulated survey's camera mount
     truth.head<6>() << 2.0, 0.5, 10.0, 0.01, 0.02, 0.1;         // robot 2 m ahead of state i
     truth.segment<6>(12) << 0.0, 0.0, 10.0, 0.0, 0.0, 0.0;
   }
