@@ -120,11 +120,15 @@ void NavFilter::serialize(Archive& ar) {
   ar(init_.roll_pitch, "initial roll/pitch");
   ar(init_.heading, "initial heading");
   ar(init_.depth, "initial depth");
-  ar(init_.roll_pitch_sensor, "initial roll/pitch sensor");
-  ar(init_.heading_sensor, "initial heading sensor");
+  serialize_size(ar, init_.roll_pitch_sensor, "initial roll/pitch sensor");
+  serialize_size(ar, init_.heading_sensor, "initial heading sensor");
   ar(warm_, "warm start tracker");
   ar(pending_image_, "pending image");
-  ar(pending_links_, "pending links");
+  auto links = static_cast<std::uint32_t>(pending_links_.size());
+  ar(links, "pending link count");
+  if (!ar.check_count(links, 8, "pending link count")) return;
+  if constexpr (Archive::kReading) pending_links_.assign(links, 0);
+  for (std::size_t& row : pending_links_) serialize_size(ar, row, "pending link");
   ar(altitude_m_, "altitude");
   ar(image_of_block_, "block -> image map");
   ar(images_, "images");

@@ -14,6 +14,7 @@
 //   footprint half-diagonal per metre of altitude, sqrt((cx/fx)² + (cy/fy)²), for link proposal
 //   (assumes a near-vertical optical axis, as on the survey vehicles).
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -79,7 +80,7 @@ class SensorModels {
   /// sensor's last angles. Reading requires the same number of sensors.
   template <class Archive>
   void serialize(Archive& ar) {
-    std::size_t n = sensors_.size();
+    std::uint64_t n = sensors_.size();  // u64 on every platform
     ar(n, "sensor count");
     if (!ar.check(n == sensors_.size(), "checkpoint has " + std::to_string(n) +
                                             " sensors, the filter " +

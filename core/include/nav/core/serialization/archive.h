@@ -119,6 +119,18 @@ class ReadArchive {
   Status status_ = Status::Ok();
 };
 
+/// A std::size_t stored as u64 on every platform (its width differs between 32- and 64-bit
+/// targets; the layouts must not), range-checked on reading.
+template <class Archive>
+void serialize_size(Archive& ar, std::size_t& value, const char* field) {
+  auto wide = static_cast<std::uint64_t>(value);
+  ar(wide, field);
+  if (ar.check(wide <= std::numeric_limits<std::size_t>::max(),
+               std::string(field) + " " + std::to_string(wide) + " out of range")) {
+    value = static_cast<std::size_t>(wide);
+  }
+}
+
 /// The bytes of `value` (its serialize function on a WriteArchive).
 template <class T>
 std::vector<std::uint8_t> to_bytes(const T& value) {

@@ -17,7 +17,7 @@ namespace nav::core {
 
 template <class Archive>
 void InformationMatrix::serialize(Archive& ar, std::uint32_t num_rows) {
-  ar(blocks_written_, "blocks-written counter");
+  serialize_size(ar, blocks_written_, "blocks-written counter");
   const int d = block_dim_;
   const std::size_t block_bytes = 8 * static_cast<std::size_t>(d) * static_cast<std::size_t>(d);
   if constexpr (Archive::kReading) rows_.assign(num_rows, Row{});
