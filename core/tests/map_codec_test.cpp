@@ -12,7 +12,6 @@
 #include <vector>
 
 #include "nav/core/serialization/byte_io.h"
-#include "nav/core/serialization/crc32.h"
 #include "nav/core/serialization/sections.h"
 #include "nav/core/sim/survey.h"
 
@@ -403,12 +402,6 @@ TEST(MapCodec, RecoveryWarmStartMustFitTheFilter) {
   EXPECT_TRUE(same_bits(other.solution(), before));  // unchanged on error
   ASSERT_TRUE(restore_recovery(set, n, &other).ok());
   EXPECT_TRUE(same_bits(other.solution(), run.recovery.solution()));
-}
-
-TEST(Crc32, CheckValue) {
-  const std::string s = "123456789";
-  EXPECT_EQ(crc32(std::span(reinterpret_cast<const std::uint8_t*>(s.data()), s.size())),
-            0xCBF43926u);
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// Checkpoints end to end at library level (issue "navd" §6, "nothing lost"): a dive (the
+// Checkpoints end to end at library level ("nothing lost"): a dive (the
 // simulated survey of core/sim, with PCG recovery and Algorithm 1 bounds driven as navd does)
 // runs in a child process that checkpoints the map through the CheckpointWorker thread every few
 // steps and on completion; the parent kills it with SIGKILL at random moments, restarts it each
@@ -28,12 +28,13 @@
 #include "nav/core/serialization/byte_io.h"
 #include "nav/core/serialization/map_codec.h"
 #include "nav/core/sim/survey.h"
-#include "nav/daemon/checkpoint.h"
-#include "nav/daemon/checkpoint_worker.h"
+#include "nav/daemon/checkpoint/checkpoint.h"
+#include "nav/daemon/checkpoint/checkpoint_worker.h"
 #include "nav/daemon/config/config.h"
-#include "nav/daemon/filter/nav_filter.h"
-#include "nav/daemon/filter/nav_filter_checkpoint.h"
-#include "nav/daemon/resume_point.h"
+#include "nav/daemon/filter/filter_options.h"
+#include "nav/daemon/checkpoint/nav_filter_checkpoint.h"
+#include "nav/daemon/checkpoint/resume_point.h"
+#include "nav/core/navigation/nav_filter.h"
 #include "support/synthetic_dive.h"
 
 namespace nav::daemon {
@@ -341,10 +342,10 @@ struct FilterDive {
     nav::testing::SyntheticDiveOptions o;
     o.duration_s = 120.0;
     dive = nav::testing::make_synthetic_dive(config, o);
-    options = NavFilterOptions::from_config(config);
+    options = filter_options_from_config(config);
   }
   std::unique_ptr<NavFilter> make() const {
-    return std::make_unique<NavFilter>(config, &dive.registrations, options);
+    return std::make_unique<NavFilter>(options, &dive.registrations);
   }
   NavdConfig config;
   nav::testing::SyntheticDive dive;
@@ -455,77 +456,6 @@ TEST_F(CheckpointResume, NavFilterKilledAtRandomPointsResumesToTheSameMap) {
   EXPECT_EQ(resumed->esdf().num_blocks(), reference->esdf().num_blocks());  // no state lost
   EXPECT_EQ(resumed->images().size(), fx.dive.image_truth.size());
   EXPECT_EQ(resumed->links().size(), reference->links().size());
-}
-
-TEST(ResumeSkipper, SkipsThePrefixAppliedIncludingTies) {
-  auto at = [](std::int64_t t) { return Measurement{Depth{MeasurementTime{t, 0, 0, 0}, 1.0}}; };
-  AppliedTracker tracker;
-  for (std::int64_t t : {10, 20, 20}) tracker.applied(at(t));
-  EXPECT_EQ(tracker.point().validity_us, 20);
-  EXPECT_EQ(tracker.point().applied_at_validity, 2u);
-  EXPECT_EQ(tracker.point().applied, 3u);
-  ResumeSkipper skipper(tracker.point());
-  std::vector<bool> skipped;
-  for (std::int64_t t : {5, 10, 20, 20, 20, 15, 30}) skipped.push_back(skipper.skip(at(t)));
-  EXPECT_EQ(skipped, (std::vector<bool>{true, true, true, true, false, true, false}));
-  EXPECT_EQ(skipper.skipped(), 5u);
-  SectionWriter w;
-  ASSERT_TRUE(add_resume_section(tracker.point(), &w).ok());
-  const Bytes bytes = w.finish();
-  SectionSet set;
-  ASSERT_TRUE(SectionSet::decode(bytes, &set).ok());
-  ResumePoint p;
-  ASSERT_TRUE(restore_resume_point(set, &p).ok());
-  EXPECT_EQ(p.validity_us, 20);
-  EXPECT_EQ(p.applied_at_validity, 2u);
-}
-
-TEST(CheckpointWorker, OffersAreWrittenSupersededAndFlushedOnStop) {
-  const fs::path dir =
-      fs::temp_directory_path() / ("checkpoint_worker_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  {
-    CheckpointWorker worker(dir, 2);
-    for (std::uint8_t i = 0; i < 50; ++i) {
-      Bytes payload(1000, i);
-      EXPECT_TRUE(worker.offer(7, std::move(payload)));
-      EXPECT_TRUE(payload.empty());  // moved, no copy kept by the caller
-    }
-    worker.stop();
-    EXPECT_FALSE(worker.offer(7, Bytes(10, 0)));
-    const CheckpointWorkerStats s = worker.stats();
-    EXPECT_EQ(s.offered, 50u);
-    EXPECT_EQ(s.written + s.superseded, 50u);  // each offer is written or replaced
-    EXPECT_EQ(s.failed, 0u);
-    EXPECT_GE(s.written, 1u);
-  }
-  // The last offer (the shutdown checkpoint) is on disk, and only `keep` files remain.
-  const LoadResult r = load_newest_valid(dir);
-  ASSERT_TRUE(r.checkpoint.has_value());
-  EXPECT_EQ(r.checkpoint->payload, Bytes(1000, 49));
-  EXPECT_EQ(r.checkpoint->payload_version, 7u);
-  EXPECT_LE(list_checkpoints(dir).size(), 2u);
-  fs::remove_all(dir);
-}
-
-TEST(CheckpointWorker, WriteErrorsAreCountedAndTheThreadGoesOn) {
-  const fs::path dir =
-      fs::temp_directory_path() / ("checkpoint_worker_err_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  CheckpointWorker worker(dir, 2);
-  fs::remove_all(dir);  // the directory vanishes under the worker
-  worker.offer(1, Bytes(10, 1));
-  worker.flush();
-  CheckpointWorkerStats s = worker.stats();
-  EXPECT_EQ(s.failed, 1u);
-  EXPECT_NE(s.last_error.find(dir.string()), std::string::npos) << s.last_error;
-  fs::create_directories(dir);
-  worker.offer(1, Bytes(10, 2));
-  worker.flush();
-  s = worker.stats();
-  EXPECT_EQ(s.written, 1u);
-  worker.stop();
-  fs::remove_all(dir);
 }
 
 }  // namespace

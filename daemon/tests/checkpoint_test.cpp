@@ -1,6 +1,7 @@
-// Checkpoints: CRC-32 against known vectors, atomic write + rotation, and loading the newest
-// valid checkpoint past truncated, bit-flipped, mis-named files and leftover temp files.
-#include "nav/daemon/checkpoint.h"
+// Checkpoints: the file format (its CRC-32s: core/serialization/crc32.h), atomic write +
+// rotation, and loading the newest valid checkpoint past truncated, bit-flipped, mis-named files
+// and leftover temp files.
+#include "nav/daemon/checkpoint/checkpoint.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -11,7 +12,6 @@
 #include <string>
 #include <string_view>
 
-#include "nav/daemon/crc32.h"
 
 namespace nav::daemon {
 namespace {
@@ -51,23 +51,6 @@ class CheckpointDir : public ::testing::Test {
   }
   fs::path dir_;
 };
-
-TEST(Crc32, KnownVectors) {
-  EXPECT_EQ(crc32(bytes_of("")), 0x00000000u);
-  EXPECT_EQ(crc32(bytes_of("a")), 0xE8B7BE43u);
-  EXPECT_EQ(crc32(bytes_of("123456789")), 0xCBF43926u);
-  EXPECT_EQ(crc32(bytes_of("The quick brown fox jumps over the lazy dog")), 0x414FA339u);
-  const std::vector<std::uint8_t> zeros(32, 0);
-  EXPECT_EQ(crc32(zeros), 0x190A55ADu);  // zlib.crc32(bytes(32))
-}
-
-TEST(Crc32, IncrementalEqualsWhole) {
-  const auto data = payload(1000, 3);
-  const std::span<const std::uint8_t> all(data);
-  for (std::size_t split : {0u, 1u, 17u, 999u, 1000u}) {
-    EXPECT_EQ(crc32_update(crc32(all.first(split)), all.subspan(split)), crc32(all)) << split;
-  }
-}
 
 TEST(CheckpointFormat, RoundTripAndHeaderLayout) {
   const auto data = payload(100, 9);

@@ -1,4 +1,4 @@
-// NavFilter with asynchronous registrations (nav_filter.h "Asynchronous registrations"): a
+// NavFilter with asynchronous registrations (nav/core/navigation/pending_registrations.h): a
 // registration available at the image is used there; one arriving later is applied between the
 // two delayed states; unanswered pairs expire; the pending set is bounded; and a table filled
 // while the filter runs (live mode: RegistrationInbox, registration_inbox.h) gives exactly the
@@ -10,8 +10,9 @@
 #include <map>
 
 #include "nav/daemon/config/config.h"
-#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/queue/registration_inbox.h"
+#include "nav/core/navigation/nav_filter.h"
 #include "support/synthetic_dive.h"
 
 namespace nav::daemon {
@@ -47,7 +48,7 @@ std::vector<navlcm::registration_t> delayed(const SyntheticDive& dive) {
 }
 
 NavFilterOptions async_options(double wait_s, int max_pending = 256) {
-  NavFilterOptions o = NavFilterOptions::from_config(sim_config());
+  NavFilterOptions o = filter_options_from_config(sim_config());
   o.registration_wait_s = wait_s;
   o.max_pending_registrations = max_pending;
   return o;
@@ -56,7 +57,7 @@ NavFilterOptions async_options(double wait_s, int max_pending = 256) {
 /// Replay style: every registration in the table before the first measurement.
 std::unique_ptr<NavFilter> run_replay(const SyntheticDive& dive, const RegistrationTable& table,
                                       const NavFilterOptions& options) {
-  auto f = std::make_unique<NavFilter>(sim_config(), &table, options);
+  auto f = std::make_unique<NavFilter>(options, &table);
   for (const Measurement& m : dive.measurements) EXPECT_TRUE(f->process(m).ok());
   EXPECT_TRUE(f->finish().ok());
   return f;
@@ -64,7 +65,7 @@ std::unique_ptr<NavFilter> run_replay(const SyntheticDive& dive, const Registrat
 
 RegistrationTable table_of(const std::vector<navlcm::registration_t>& regs) {
   RegistrationTable t;
-  for (const auto& r : regs) t.insert(r);
+  for (const auto& r : regs) t.insert(registration_from_message(r));
   return t;
 }
 
@@ -157,7 +158,7 @@ TEST(AsyncLinks, LiveInsertionGivesTheLinksOfReplayForTheSameArrivalTimes) {
   std::sort(regs.begin(), regs.end(),
             [](const auto& a, const auto& b) { return a.utime < b.utime; });
   RegistrationInbox inbox(64);
-  NavFilter live(sim_config(), &inbox.table(), async_options(3.0));
+  NavFilter live(async_options(3.0), &inbox.table());
   navlcm::registration_t unknown = regs.front();
   unknown.frame_id_i = 1000;
   unknown.frame_id_j = 1001;
@@ -210,7 +211,7 @@ TEST(AsyncLinks, UnansweredPairsExpireAfterTheWait) {
 TEST(AsyncLinks, PendingSetIsBounded) {
   const SyntheticDive dive = dive_with_realtime();
   const RegistrationTable empty;
-  NavFilter f(sim_config(), &empty, async_options(1000.0, 3));
+  NavFilter f(async_options(1000.0, 3), &empty);
   std::size_t most = 0;
   for (const Measurement& m : dive.measurements) {
     ASSERT_TRUE(f.process(m).ok());
@@ -220,8 +221,8 @@ TEST(AsyncLinks, PendingSetIsBounded) {
   EXPECT_EQ(f.pending_counters().deferred, 3u);
   EXPECT_GT(f.pending_counters().dropped_full, 0u);
   EXPECT_EQ(f.pending_registrations().back().sequence, 3u);
-  EXPECT_THROW((NavFilter{sim_config(), &empty, async_options(-1.0)}), std::invalid_argument);
-  EXPECT_THROW((NavFilter{sim_config(), &empty, async_options(1.0, 0)}), std::invalid_argument);
+  EXPECT_THROW((NavFilter{async_options(-1.0), &empty}), std::invalid_argument);
+  EXPECT_THROW((NavFilter{async_options(1.0, 0), &empty}), std::invalid_argument);
 }
 
 TEST(RegistrationInbox, KeepsTheFirstAnswerCountsInvalidAndDrops) {

@@ -5,7 +5,7 @@
 // measurements ends bit-identical to the uninterrupted filter, link history and trajectory
 // included; every 11th truncation of the NAVF section is refused, a flipped byte (every 17th) is
 // refused or decodes to exactly those bytes, and a refused restore leaves the filter untouched.
-#include "nav/daemon/filter/nav_filter_checkpoint.h"
+#include "nav/daemon/checkpoint/nav_filter_checkpoint.h"
 
 #include <gtest/gtest.h>
 
@@ -15,9 +15,10 @@
 
 #include "nav/core/serialization/sections.h"
 #include "nav/daemon/config/config.h"
-#include "nav/daemon/filter/nav_filter.h"
-#include "nav/daemon/filter/nav_filter_checkpointer.h"
-#include "nav/daemon/resume_point.h"
+#include "nav/daemon/filter/filter_options.h"
+#include "nav/daemon/checkpoint/nav_filter_checkpointer.h"
+#include "nav/daemon/checkpoint/resume_point.h"
+#include "nav/core/navigation/nav_filter.h"
 #include "support/nav_filter_fixture.h"
 
 namespace nav::daemon {
@@ -170,8 +171,10 @@ TEST(NavFilterCheckpointer, StopResumeAndSkipEndBitIdentical) {
   ASSERT_TRUE(writer.write(kNavFilterPayloadVersion + 1, Bytes{1, 2, 3}).ok);
   resumed = resume_nav_filter(dir, [&fx] { return fx.make(); });
   ASSERT_EQ(resumed.skipped.size(), 1u);
-  EXPECT_NE(resumed.skipped[0].reason.find("payload version 2, this navd reads 1"),
-            std::string::npos);
+  const std::string expected = "payload version " + std::to_string(kNavFilterPayloadVersion + 1) +
+                               ", this navd reads " + std::to_string(kNavFilterPayloadVersion);
+  EXPECT_NE(resumed.skipped[0].reason.find(expected), std::string::npos)
+      << resumed.skipped[0].reason;
   EXPECT_EQ(resumed.point.applied, ms.size());
   std::filesystem::remove_all(dir);
 }

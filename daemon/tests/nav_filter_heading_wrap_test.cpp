@@ -12,7 +12,8 @@
 #include <numbers>
 
 #include "nav/daemon/config/config.h"
-#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/filter/filter_options.h"
+#include "nav/core/navigation/nav_filter.h"
 #include "support/synthetic_dive.h"
 
 namespace nav::daemon {
@@ -29,9 +30,9 @@ struct WrapRun {
 WrapRun run(const nav::testing::SyntheticDiveOptions& o, bool links) {
   const NavdConfig config = load_config_file("config/sim.yaml");  // ctest: source directory
   const nav::testing::SyntheticDive dive = nav::testing::make_synthetic_dive(config, o);
-  NavFilterOptions options = NavFilterOptions::from_config(config);
+  NavFilterOptions options = filter_options_from_config(config);
   options.propose_links = links;
-  NavFilter filter(config, &dive.registrations, options);
+  NavFilter filter(options, &dive.registrations);
   for (const Measurement& m : dive.measurements) {
     const core::Status s = filter.process(m);
     EXPECT_TRUE(s.ok()) << s.to_string();

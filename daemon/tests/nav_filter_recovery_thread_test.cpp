@@ -1,4 +1,4 @@
-// NavFilter's recovery thread (nav_filter.h "Recovery thread", recovery_worker.h) on the
+// NavFilter's recovery thread (recovery_executor.h, recovery_worker.h) on the
 // synthetic dive of support/synthetic_dive.h: the outputs (the whole checkpointed state, link
 // history and trajectory) are bit-identical across runs, with random delays injected on the
 // recovery thread, and to the jobs run inline on the filter thread; a checkpoint or a copy
@@ -22,8 +22,10 @@
 #include "nav/core/recovery/exact_marginals.h"
 #include "nav/core/serialization/sections.h"
 #include "nav/daemon/config/config.h"
-#include "nav/daemon/filter/nav_filter.h"
-#include "nav/daemon/filter/nav_filter_checkpoint.h"
+#include "nav/daemon/filter/filter_options.h"
+#include "nav/daemon/filter/recovery_worker.h"
+#include "nav/daemon/checkpoint/nav_filter_checkpoint.h"
+#include "nav/core/navigation/nav_filter.h"
 #include "support/nav_filter_fixture.h"
 
 namespace nav::daemon {
@@ -36,6 +38,7 @@ using nav::testing::encode;
 struct Fixture : nav::testing::NavFilterFixture {
   explicit Fixture(double duration_s) : NavFilterFixture(duration_s) {
     options.recovery_thread = true;
+    options.recovery_executor = threaded_recovery_executor();
   }
 };
 
@@ -77,10 +80,9 @@ TEST(RecoveryThread, OutputsBitIdenticalAcrossRunsDelaysAndInline) {
   NavFilterOptions early = o;
   early.recovery_handoff_s = 0.5;
   const Bytes early_bytes = run_all(fx, early);
-  early.recovery_test_hook = random_delays(3);
+  early.recovery_executor = threaded_recovery_executor(random_delays(3));
   EXPECT_EQ(run_all(fx, early), early_bytes) << "hand-off 0.5 s, random delays";
-  early.recovery_test_hook = {};
-  early.recovery_inline = true;
+  early.recovery_executor = {};  // core::InlineRecoveryExecutor
   EXPECT_EQ(run_all(fx, early), early_bytes) << "hand-off 0.5 s, inline";
   // Default hand-off (10 s): the next image takes each job.
   const Bytes first = run_all(fx, o);
@@ -88,11 +90,11 @@ TEST(RecoveryThread, OutputsBitIdenticalAcrossRunsDelaysAndInline) {
   EXPECT_EQ(run_all(fx, o), first) << "second run";
   for (unsigned seed : {1u, 2u}) {
     NavFilterOptions delayed = o;
-    delayed.recovery_test_hook = random_delays(seed);
+    delayed.recovery_executor = threaded_recovery_executor(random_delays(seed));
     EXPECT_EQ(run_all(fx, delayed), first) << "random delays, seed " << seed;
   }
   NavFilterOptions inline_jobs = o;
-  inline_jobs.recovery_inline = true;
+  inline_jobs.recovery_executor = {};  // core::InlineRecoveryExecutor
   EXPECT_EQ(run_all(fx, inline_jobs), first) << "jobs inline on the filter thread";
   NavFilterOptions sync = o;
   sync.recovery_thread = false;
@@ -104,7 +106,8 @@ TEST(RecoveryThread, CheckpointAndCopyWithAJobInFlightContinueBitIdentical) {
   const auto& ms = fx.dive.measurements;
   NavFilterOptions o = fx.options;
   const Bytes expected = run_all(fx, o);
-  o.recovery_test_hook = [] { std::this_thread::sleep_for(std::chrono::milliseconds(20)); };
+  o.recovery_executor = threaded_recovery_executor(
+      [] { std::this_thread::sleep_for(std::chrono::milliseconds(20)); });
   for (double fraction : {0.3, 0.7}) {
     const std::size_t cut = after_image(ms, fraction);
     auto original = fx.make(o);
@@ -153,10 +156,10 @@ TEST(RecoveryThread, DestroyedWithASlowJobInFlightShutsDownCleanly) {
   const auto& ms = fx.dive.measurements;
   NavFilterOptions o = fx.options;
   auto started = std::make_shared<std::atomic<int>>(0);
-  o.recovery_test_hook = [started] {
+  o.recovery_executor = threaded_recovery_executor([started] {
     ++*started;
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  };
+  });
   auto f = fx.make(o);
   const std::size_t cut = after_image(ms, 0.5);
   for (std::size_t i = 0; i < cut; ++i) ASSERT_TRUE(f->process(ms[i]).ok());

@@ -1,7 +1,7 @@
 // NavFilter on a synthetic dive with known truth (support/synthetic_dive.h): estimate within its
 // covariance, loop closures proposed from the bounds and accepted, a gross outlier gated,
 // bounds conservative against exact marginals, dead reckoning looser than SLAM, O(1) work per
-// measurement; and the chi-square gate conversion.
+// measurement.
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
@@ -9,8 +9,9 @@
 #include "nav/core/recovery/consistency.h"
 #include "nav/core/recovery/exact_marginals.h"
 #include "nav/daemon/config/config.h"
-#include "nav/daemon/filter/chi_square.h"
-#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/filter/filter_options.h"
+#include "nav/core/navigation/chi_square.h"
+#include "nav/core/navigation/nav_filter.h"
 #include "support/synthetic_dive.h"
 
 namespace nav::daemon {
@@ -29,9 +30,9 @@ DiveRun run_dive(const nav::testing::SyntheticDiveOptions& dive_options, bool li
   const NavdConfig config = sim_config();
   DiveRun run;
   run.dive = nav::testing::make_synthetic_dive(config, dive_options);
-  NavFilterOptions options = NavFilterOptions::from_config(config);
+  NavFilterOptions options = filter_options_from_config(config);
   options.propose_links = links;
-  run.filter = std::make_unique<NavFilter>(config, &run.dive.registrations, options);
+  run.filter = std::make_unique<NavFilter>(options, &run.dive.registrations);
   for (const Measurement& m : run.dive.measurements) {
     const core::Status s = run.filter->process(m);
     EXPECT_TRUE(s.ok()) << s.to_string();
@@ -51,16 +52,6 @@ double xy_nees(const core::Esdf& esdf, const core::ExactMarginals& exact, int bl
   const Eigen::Matrix2d P = exact.marginal(block).topLeftCorner<2, 2>();
   (void)esdf;
   return e.dot(P.ldlt().solve(e));
-}
-
-TEST(ChiSquare, MatchesTablesAndConvertsTheSixDofGate) {
-  EXPECT_NEAR(chi_square_quantile(0.99, 6), 16.812, 1e-3);
-  EXPECT_NEAR(chi_square_quantile(0.99, 5), 15.086, 1e-3);
-  EXPECT_NEAR(chi_square_quantile(0.95, 1), 3.841, 1e-3);
-  EXPECT_NEAR(chi_square_quantile(0.99, 2), 9.210, 1e-3);
-  EXPECT_NEAR(chi_square_cdf(2.0, 2), 1.0 - std::exp(-1.0), 1e-14);
-  EXPECT_NEAR(equivalent_chi_square_gate(16.81, 6, 5), 15.08, 0.01);
-  EXPECT_THROW(chi_square_cdf(1.0, 0), std::invalid_argument);
 }
 
 TEST(NavFilter, TracksTruthWithinItsCovarianceAndClosesTheLoop) {
@@ -153,7 +144,7 @@ TEST(NavFilter, MeasurementWorkDoesNotGrowWithTheMap) {
   o.duration_s = 40.0;
   const NavdConfig config = sim_config();
   const nav::testing::SyntheticDive dive = nav::testing::make_synthetic_dive(config, o);
-  NavFilter f(config, &dive.registrations, NavFilterOptions::from_config(config));
+  NavFilter f(filter_options_from_config(config), &dive.registrations);
   std::vector<int> dvl_blocks_written;
   for (const Measurement& m : dive.measurements) {
     ASSERT_TRUE(f.process(m).ok());
@@ -167,7 +158,7 @@ TEST(NavFilter, MeasurementWorkDoesNotGrowWithTheMap) {
 
 TEST(NavFilter, StartsAtTheFirstMeasurementAndCountsOutOfOrder) {
   const NavdConfig config = sim_config();
-  NavFilter f(config, nullptr, NavFilterOptions::from_config(config));
+  NavFilter f(filter_options_from_config(config), nullptr);
   DvlVelocity early;
   early.time.validity_us = 10;
   ASSERT_TRUE(f.process(early).ok());

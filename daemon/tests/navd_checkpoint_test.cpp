@@ -18,7 +18,7 @@
 #include <string>
 #include <thread>
 
-#include "nav/daemon/checkpoint.h"
+#include "nav/daemon/checkpoint/checkpoint.h"
 #include "support/navtool_run.h"
 
 namespace nav::tool::test {

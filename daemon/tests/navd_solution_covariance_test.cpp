@@ -16,9 +16,10 @@
 
 #include "nav/core/recovery/exact_marginals.h"
 #include "nav/daemon/config/config.h"
-#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/service/link_publisher.h"
 #include "nav/daemon/service/solution_board.h"
+#include "nav/core/navigation/nav_filter.h"
 #include "support/synthetic_dive.h"
 
 namespace nav::daemon::service {
@@ -61,8 +62,7 @@ TEST(NavdSolutionCovariance, IsTheRobotMarginalFromTheFirstEstimate) {
   dive_options.duration_s = 20.0;
   dive_options.image_period_s = 4.0;
   const nav::testing::SyntheticDive dive = nav::testing::make_synthetic_dive(config, dive_options);
-  daemon::NavFilter filter(config, &dive.registrations,
-                           daemon::NavFilterOptions::from_config(config));
+  daemon::NavFilter filter(daemon::filter_options_from_config(config), &dive.registrations);
   SolutionBoard board;
   LinkPublisher links(config.lcm, board);
   int robot_only = 0, recovered = 0;

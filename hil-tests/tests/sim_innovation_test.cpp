@@ -1,4 +1,4 @@
-// Innovation monitoring (nav/daemon/filter/innovation_stats.h) on simulated dives replayed
+// Innovation monitoring (nav/core/navigation/innovation_stats.h) on simulated dives replayed
 // through navd's path (daemon::run_replay): with the simulator's errors as the config models
 // them (white noise at the config sigmas, no biases), each sensor's mean NIS is near its
 // measurement dimension (within the band stated below); a depth sensor ten times noisier than
@@ -13,8 +13,9 @@
 #include <random>
 
 #include "nav/core/models/unary_models.h"
-#include "nav/daemon/filter/innovation_stats.h"
+#include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/replay/dive_replay.h"
+#include "nav/core/navigation/innovation_stats.h"
 #include "support/sim_dive.h"
 
 namespace nav::sim::test {
@@ -69,7 +70,7 @@ TEST(SimInnovation, NisOfAOneDimensionalUpdateIsTheSquaredInnovationOverItsVaria
   core::Mat12 P = core::Mat12::Identity() * 0.03;
   core::MeasCov R(1, 1);
   R << 0.01;
-  const daemon::InnovationSample s = daemon::innovation_sample(core::HeadingModel{}, z, h, H, P, R);
+  const core::InnovationSample s = core::innovation_sample(core::HeadingModel{}, z, h, H, P, R);
   ASSERT_TRUE(s.valid);
   EXPECT_NEAR(s.nu(0), 0.2, 1e-15);
   EXPECT_NEAR(s.S(0, 0), 0.04, 1e-15);
@@ -77,7 +78,7 @@ TEST(SimInnovation, NisOfAOneDimensionalUpdateIsTheSquaredInnovationOverItsVaria
   // Angle rows are wrapped: 3.1 − (−3.1) is −0.083 rad, not 6.2.
   z << 3.1;
   h << -3.1;
-  const daemon::InnovationSample w = daemon::innovation_sample(core::HeadingModel{}, z, h, H, P, R);
+  const core::InnovationSample w = core::innovation_sample(core::HeadingModel{}, z, h, H, P, R);
   EXPECT_NEAR(w.nu(0), 6.2 - 2.0 * M_PI, 1e-12);
 }
 
@@ -100,8 +101,8 @@ TEST(SimInnovation, MeanNisOfAnExactKalmanFilterIsWithinTheChiSquareBounds) {
     core::MeasVec z(1), h(1);
     z << truth + std::sqrt(r) * normal(rng);
     h << mean_estimate;
-    const daemon::InnovationSample s =
-        daemon::innovation_sample(core::HeadingModel{}, z, h, H, P, R);
+    const core::InnovationSample s =
+        core::innovation_sample(core::HeadingModel{}, z, h, H, P, R);
     ASSERT_TRUE(s.valid);
     nis_sum += s.nis;
     const double gain = P(5, 5) / s.S(0, 0);

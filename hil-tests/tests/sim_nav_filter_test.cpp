@@ -16,8 +16,10 @@
 #include <cmath>
 #include <cstdio>
 
-#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/filter/filter_options.h"
+#include "nav/daemon/filter/recovery_worker.h"
 #include "nav/daemon/queue/measurement_queue.h"
+#include "nav/core/navigation/nav_filter.h"
 #include "nav/daemon/sources/dive_log_source.h"
 #include "support/sim_dive.h"
 
@@ -45,10 +47,11 @@ FilterRun run_filter(const std::filesystem::path& dir, bool links, bool recovery
   std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) {
     return daemon::validity_us(a) < daemon::validity_us(b);
   });
-  daemon::NavFilterOptions fo = daemon::NavFilterOptions::from_config(cfg);
+  daemon::NavFilterOptions fo = daemon::filter_options_from_config(cfg);
   fo.propose_links = links;
   fo.recovery_thread = recovery_thread;
-  daemon::NavFilter filter(cfg, &table, fo);
+  if (recovery_thread) fo.recovery_executor = daemon::threaded_recovery_executor();
+  daemon::NavFilter filter(fo, &table);
   constexpr std::int64_t kMergeUs = 1000;
   std::int64_t last_us = 0;
   for (daemon::Measurement m : all) {

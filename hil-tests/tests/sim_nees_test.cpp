@@ -14,7 +14,7 @@
 #include <cstdio>
 
 #include "nav/core/geometry/rotation.h"
-#include "nav/daemon/filter/chi_square.h"
+#include "nav/core/navigation/chi_square.h"
 #include "nav/daemon/replay/dive_replay.h"
 #include "support/sim_dive.h"
 
@@ -39,8 +39,8 @@ std::pair<double, double> mean_chi2_interval(int dof, int seeds, double confiden
   const int n = dof * seeds;
   const double lo_p = 0.5 * (1.0 - confidence), hi_p = 1.0 - lo_p;
   if (n <= 100)
-    return {daemon::chi_square_quantile(lo_p, n) / seeds,
-            daemon::chi_square_quantile(hi_p, n) / seeds};
+    return {core::chi_square_quantile(lo_p, n) / seeds,
+            core::chi_square_quantile(hi_p, n) / seeds};
   const double z = 1.959963984540054;  // 97.5 % normal quantile (95 % two-sided)
   EXPECT_NEAR(confidence, 0.95, 1e-12) << "Wilson-Hilferty branch has z for 95 % only";
   const double c = 2.0 / (9.0 * n);

@@ -1,17 +1,50 @@
 // Section container for map checkpoints (see nav/core/serialization/sections.h).
 #include "nav/core/serialization/sections.h"
 
+#include <array>
 #include <cstdio>
-#include <cstring>
 #include <utility>
 
-#include "nav/core/serialization/byte_io.h"
+#include "nav/core/serialization/archive.h"
 #include "nav/core/serialization/crc32.h"
 
 namespace nav::core {
 namespace {
 
-constexpr char kMagic[8] = {'N', 'A', 'V', 'S', 'E', 'C', 'T', 'S'};
+constexpr std::array<std::uint8_t, 8> kMagic = {'N', 'A', 'V', 'S', 'E', 'C', 'T', 'S'};
+
+/// The container's header and each section's header (layouts in sections.h), both ways.
+struct ContainerHeader {
+  std::array<std::uint8_t, 8> magic{};
+  std::uint32_t version = 0;
+  std::uint32_t count = 0;
+};
+struct SectionHeader {
+  std::uint32_t tag = 0, version = 0;
+  std::uint64_t length = 0;
+  std::uint32_t crc = 0;  ///< of the header's first 16 bytes and the section's bytes
+};
+
+template <class Archive>
+void serialize(Archive& ar, ContainerHeader& h) {
+  ar(h.magic, "magic");
+  ar(h.version, "container version");
+  ar(h.count, "section count");
+}
+
+template <class Archive>
+void serialize(Archive& ar, SectionHeader& h) {
+  ar(h.tag, "section tag");
+  ar(h.version, "section version");
+  ar(h.length, "section length");
+  ar(h.crc, "section CRC-32");
+}
+
+/// CRC-32 of a section: its header without the CRC field, then its bytes.
+std::uint32_t section_crc(std::span<const std::uint8_t> header16,
+                          std::span<const std::uint8_t> bytes) {
+  return crc32_update(crc32(header16), bytes);
+}
 
 Status bad(const std::string& message, std::size_t offset) {
   return Status::Error(StatusCode::kInvalidArgument, "map section container: " + message +
@@ -47,68 +80,63 @@ Status SectionWriter::add(std::uint32_t tag, std::uint32_t version,
 }
 
 std::vector<std::uint8_t> SectionWriter::finish() const {
-  ByteWriter w;
-  w.bytes(std::span(reinterpret_cast<const std::uint8_t*>(kMagic), sizeof kMagic));
-  w.u32(kSectionContainerVersion);
-  w.u32(static_cast<std::uint32_t>(sections_.size()));
+  WriteArchive ar;
+  ContainerHeader container{kMagic, kSectionContainerVersion,
+                            static_cast<std::uint32_t>(sections_.size())};
+  ar(container, "container");
   for (const Entry& e : sections_) {
-    const std::size_t header_at = w.data().size();
-    w.u32(e.tag);
-    w.u32(e.version);
-    w.u64(e.bytes.size());
-    const std::uint32_t crc =
-        crc32_update(crc32(std::span(w.data()).subspan(header_at, 16)), e.bytes);
-    w.u32(crc);
-    w.bytes(e.bytes);
+    SectionHeader h{e.tag, e.version, e.bytes.size(), 0};
+    const std::vector<std::uint8_t> header = to_bytes(h);
+    h.crc = section_crc(std::span(header).first(16), e.bytes);
+    ar(h, "section header");
+    std::span<const std::uint8_t> bytes(e.bytes);
+    ar.raw(bytes, bytes.size(), "section bytes");
   }
-  return w.take();
+  return ar.take();
 }
 
 Status SectionSet::decode(std::span<const std::uint8_t> bytes, SectionSet* out,
                           SectionDecodeOptions options) {
-  ByteReader r(bytes, "map section container");
-  std::span<const std::uint8_t> magic;
-  if (Status s = r.raw(&magic, sizeof kMagic, "magic"); !s.ok()) return s;
-  if (std::memcmp(magic.data(), kMagic, sizeof kMagic) != 0) {
-    return bad("bad magic (not NAVSECTS)", 0);
+  ReadArchive ar(bytes, "map section container");
+  ContainerHeader container;
+  ar(container.magic, "magic");
+  if (!ar.ok()) return ar.status();
+  if (container.magic != kMagic) return bad("bad magic (not NAVSECTS)", 0);
+  ar(container.version, "container version");
+  if (!ar.ok()) return ar.status();
+  if (container.version != kSectionContainerVersion) {
+    return bad("unsupported container version " + std::to_string(container.version), 8);
   }
-  std::uint32_t version = 0, count = 0;
-  if (Status s = r.u32(&version, "container version"); !s.ok()) return s;
-  if (version != kSectionContainerVersion) {
-    return bad("unsupported container version " + std::to_string(version), 8);
-  }
-  if (Status s = r.u32(&count, "section count"); !s.ok()) return s;
-  if (Status s = r.check_count(count, kSectionHeaderBytes, "section count"); !s.ok()) return s;
+  ar(container.count, "section count");
+  if (!ar.check_count(container.count, kSectionHeaderBytes, "section count")) return ar.status();
   SectionSet set;
-  set.sections_.reserve(count);
-  for (std::uint32_t i = 0; i < count; ++i) {
-    const std::size_t header_at = r.offset();
+  set.sections_.reserve(container.count);
+  for (std::uint32_t i = 0; i < container.count; ++i) {
+    const std::size_t header_at = ar.offset();
+    SectionHeader h;
+    ar(h, "section header");
+    if (!ar.ok()) return ar.status();
     SectionView v;
-    std::uint64_t length = 0;
-    std::uint32_t crc = 0;
-    if (Status s = r.u32(&v.tag, "section tag"); !s.ok()) return s;
-    if (Status s = r.u32(&v.version, "section version"); !s.ok()) return s;
-    if (Status s = r.u64(&length, "section length"); !s.ok()) return s;
-    if (Status s = r.u32(&crc, "section CRC-32"); !s.ok()) return s;
-    if (length > r.remaining()) {
+    v.tag = h.tag;
+    v.version = h.version;
+    if (h.length > ar.remaining()) {
       return bad("section " + std::to_string(i) + " (" + section_tag_name(v.tag) + ") length " +
-                     std::to_string(length) + " exceeds the " + std::to_string(r.remaining()) +
-                     " bytes left",
+                     std::to_string(h.length) + " exceeds the " +
+                     std::to_string(ar.remaining()) + " bytes left",
                  header_at);
     }
     if (set.find(v.tag) != nullptr) {
       return bad("duplicate section " + section_tag_name(v.tag), header_at);
     }
-    v.offset = r.offset();
-    if (Status s = r.raw(&v.bytes, static_cast<std::size_t>(length), "section bytes"); !s.ok()) {
-      return s;
-    }
-    if (options.verify_crc && crc32_update(crc32(bytes.subspan(header_at, 16)), v.bytes) != crc) {
+    v.offset = ar.offset();
+    ar.raw(v.bytes, static_cast<std::size_t>(h.length), "section bytes");
+    if (!ar.ok()) return ar.status();
+    if (options.verify_crc && section_crc(bytes.subspan(header_at, 16), v.bytes) != h.crc) {
       return bad("CRC-32 mismatch in section " + section_tag_name(v.tag), header_at);
     }
     set.sections_.push_back(v);
   }
-  if (Status s = r.expect_end(); !s.ok()) return s;
+  if (Status s = ar.finish(); !s.ok()) return s;
   *out = std::move(set);
   return Status::Ok();
 }

@@ -43,7 +43,7 @@ std::size_t RegistrationInbox::drain() {
                    r.frame_id_i, r.frame_id_j);
       continue;
     }
-    if (table_.insert(r)) {
+    if (table_.insert(registration_from_message(r))) {
       inserted_.fetch_add(1, kRelaxed);
     } else {
       duplicates_.fetch_add(1, kRelaxed);

@@ -8,10 +8,10 @@
 #include <optional>
 #include <thread>
 
-#include "nav/daemon/filter/nav_filter_checkpointer.h"
+#include "nav/daemon/checkpoint/nav_filter_checkpointer.h"
 #include "nav/daemon/queue/measurement_queue.h"
 #include "nav/daemon/replay/filter_worker.h"
-#include "nav/daemon/resume_point.h"
+#include "nav/daemon/checkpoint/resume_point.h"
 
 namespace nav::daemon {
 namespace {
@@ -55,15 +55,15 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
   ReplayRun run;
   run.log_path = log_path;
   run.registrations = std::make_unique<RegistrationTable>(load_registrations(log_path));
-  const NavFilterOptions filter_options = NavFilterOptions::from_config(config);
-  run.slam = std::make_unique<NavFilter>(config, run.registrations.get(), filter_options);
+  const NavFilterOptions filter_options = filter_options_from_config(config);
+  run.slam = std::make_unique<NavFilter>(filter_options, run.registrations.get());
   if (options.dead_reckoning) {
     NavFilterOptions dr = filter_options;
     dr.propose_links = false;
     // The twin already runs on its own thread (FilterWorker): a recovery thread of its own
     // would only compete with the SLAM filter's for the cores. Synchronous recovery.
     dr.recovery_thread = false;
-    run.dead_reckoning = std::make_unique<NavFilter>(config, nullptr, dr);
+    run.dead_reckoning = std::make_unique<NavFilter>(dr, nullptr);
   }
   Checkpointing ckpt;
   if (options.checkpoints) {
@@ -71,7 +71,7 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
         options.checkpoint_identity.empty() ? log_path : options.checkpoint_identity;
     ResumedNavFilter resumed = resume_nav_filter(
         config.checkpoint.path,
-        [&] { return std::make_unique<NavFilter>(config, run.registrations.get(), filter_options); },
+        [&] { return std::make_unique<NavFilter>(filter_options, run.registrations.get()); },
         identity);
     for (const SkippedCheckpoint& k : resumed.skipped) {
       spdlog::warn("navd: checkpoint {} skipped: {}", k.path.string(), k.reason);

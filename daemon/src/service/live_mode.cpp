@@ -12,10 +12,11 @@
 #include <thread>
 #include <vector>
 
-#include "nav/daemon/filter/nav_filter.h"
-#include "nav/daemon/filter/nav_filter_checkpointer.h"
+#include "nav/daemon/filter/filter_options.h"
+#include "nav/daemon/checkpoint/nav_filter_checkpointer.h"
 #include "nav/daemon/queue/measurement_queue.h"
-#include "nav/daemon/resume_point.h"
+#include "nav/daemon/checkpoint/resume_point.h"
+#include "nav/core/navigation/nav_filter.h"
 #include "nav/daemon/service/lcm_url.h"
 #include "nav/daemon/service/link_publisher.h"
 #include "nav/daemon/service/navd_devices.h"
@@ -52,12 +53,12 @@ struct LiveFilter {
 };
 
 LiveFilter make_live_filter(const daemon::NavdConfig& config, bool checkpoints) {
-  const daemon::NavFilterOptions options = daemon::NavFilterOptions::from_config(config);
+  const daemon::NavFilterOptions options = daemon::filter_options_from_config(config);
   LiveFilter live;
   live.inbox = std::make_unique<daemon::RegistrationInbox>(kRegistrationCapacity);
   live.proposals = std::make_unique<LinkProposalPublisher>(config);
   const daemon::RegistrationTable* table = &live.inbox->table();
-  auto make = [&] { return std::make_unique<daemon::NavFilter>(config, table, options); };
+  auto make = [&] { return std::make_unique<daemon::NavFilter>(options, table); };
   live.slam = make();
   if (!checkpoints) return live;
   daemon::ResumedNavFilter resumed =

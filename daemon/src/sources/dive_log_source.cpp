@@ -193,7 +193,7 @@ RegistrationTable load_registrations(const std::string& log_path) {
     const auto* r = std::get_if<navlcm::registration_t>(&*event);
     if (r == nullptr) continue;
     try {
-      table.insert(*r);
+      table.insert(registration_from_message(*r));
     } catch (const std::invalid_argument& e) {
       throw DiveLogError(log_path + ": event " + std::to_string(reader.events_read()) + ": " +
                          e.what());

@@ -11,8 +11,9 @@
 
 #include "nav/core/serialization/sections.h"
 #include "nav/daemon/config/config.h"
-#include "nav/daemon/filter/nav_filter.h"
-#include "nav/daemon/filter/nav_filter_checkpoint.h"
+#include "nav/daemon/filter/filter_options.h"
+#include "nav/daemon/checkpoint/nav_filter_checkpoint.h"
+#include "nav/core/navigation/nav_filter.h"
 #include "synthetic_dive.h"
 
 namespace nav::testing {
@@ -25,10 +26,10 @@ struct NavFilterFixture {
     SyntheticDiveOptions o;
     o.duration_s = duration_s;
     dive = make_synthetic_dive(config, o);
-    options = daemon::NavFilterOptions::from_config(config);
+    options = daemon::filter_options_from_config(config);
   }
   std::unique_ptr<daemon::NavFilter> make(const daemon::NavFilterOptions& o) const {
-    return std::make_unique<daemon::NavFilter>(config, &dive.registrations, o);
+    return std::make_unique<daemon::NavFilter>(o, &dive.registrations);
   }
   std::unique_ptr<daemon::NavFilter> make() const { return make(options); }
 

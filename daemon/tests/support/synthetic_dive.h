@@ -18,10 +18,11 @@
 
 #include "nav/core/geometry/pose.h"
 #include "nav/core/geometry/rotation.h"
+#include "nav/core/navigation/sensor_models.h"
 #include "nav/daemon/config/config.h"
-#include "nav/daemon/filter/sensor_models.h"
-#include "nav/daemon/measurement.h"
-#include "nav/daemon/registration_table.h"
+#include "nav/daemon/filter/filter_options.h"
+#include "nav/daemon/filter/registration_message.h"
+#include "nav/daemon/queue/measurements.h"
 
 namespace nav::testing {
 
@@ -77,7 +78,7 @@ inline SyntheticDive make_synthetic_dive(const daemon::NavdConfig& config,
   SyntheticDive dive;
   std::mt19937_64 rng(o.seed);
   std::normal_distribution<double> n01(0.0, 1.0);
-  daemon::SensorModels models(config);
+  core::SensorModels models(daemon::filter_options_from_config(config).sensors);
   int dvl = -1, att = -1, depth = -1, alt = -1, cam = -1;
   for (std::size_t i = 0; i < config.sensors.size(); ++i) {
     const int k = static_cast<int>(i);
@@ -177,7 +178,7 @@ inline SyntheticDive make_synthetic_dive(const daemon::NavdConfig& config,
       }
       reg.overlap_fraction = 1.0 - (c_i.head<2>() - c_j.head<2>()).norm() / (2.0 * r_fp);
       if (reg.success) ++dive.registrations_succeeded;
-      dive.registrations.insert(reg);
+      dive.registrations.insert(daemon::registration_from_message(reg));
       dive.registration_messages.push_back(reg);
     }
   }

@@ -24,8 +24,9 @@
 
 #include "nav/core/geometry/pose.h"
 #include "nav/daemon/config/config.h"
-#include "nav/daemon/filter/sensor_models.h"
+#include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/system/host_clock.h"
+#include "nav/core/navigation/sensor_models.h"
 #include "sim_dive.h"
 
 namespace nav::hil::test {
@@ -34,7 +35,9 @@ class OracleVision {
  public:
   OracleVision(const daemon::NavdConfig& config, const std::filesystem::path& truth_csv,
                double altitude_m, lcm::LCM& lcm)
-      : models_(config), rows_(nav::sim::test::read_csv(truth_csv)), lcm_(lcm) {
+      : models_(daemon::filter_options_from_config(config).sensors),
+        rows_(nav::sim::test::read_csv(truth_csv)),
+        lcm_(lcm) {
     r_fp_m_ = altitude_m * models_.footprint_radius_per_altitude();
   }
   /// The player's time mapping (PlayerOptions::on_start; any thread).
@@ -93,7 +96,7 @@ class OracleVision {
     return x;
   }
 
-  daemon::SensorModels models_;
+  core::SensorModels models_;
   std::vector<std::vector<double>> rows_;
   lcm::LCM& lcm_;
   double r_fp_m_ = 1.0;

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <deque>
 #include <vector>
 
@@ -39,8 +40,12 @@ class BlockVector {
   /// valid until the next call of a non-const member.
   const Eigen::VectorXd& dense() const;
 
+  /// `num_blocks` segments both ways; reading replaces the vector
+  /// (core/serialization/map_serialization.h).
+  template <class Archive>
+  void serialize(Archive& ar, std::uint32_t num_blocks, const char* field);
+
  private:
-  friend struct MapCodecAccess;  // checkpoints: serialization/map_codec.cpp
   static constexpr size_t kMaxTracked = 64;
   void mark(int i);
 

@@ -105,8 +105,12 @@ class Esdf {
   /// Blocks touched by the last successful predict/update.
   const UpdateStats& last_stats() const { return stats_; }
 
+  /// Λ (both halves, in storage order), η and μ both ways; reading replaces the filter
+  /// (core/serialization/map_serialization.h, section "ESDF").
+  template <class Archive>
+  void serialize(Archive& ar);
+
  private:
-  friend struct MapCodecAccess;  // checkpoints: serialization/map_codec.cpp
   Status check_block(int block, const char* where) const;
   Status check_measurement(const MeasVec& z, const MeasVec& h, const MeasJac* H1,
                            const MeasJac* H2, const MeasCov& R, const char* where,

@@ -17,6 +17,7 @@
 #include <Eigen/SparseCore>
 
 #include <cstddef>
+#include <cstdint>
 #include <deque>
 #include <vector>
 
@@ -84,8 +85,14 @@ class InformationMatrix {
   /// operation touched (the constant-time property of the ESDF).
   size_t blocks_written() const { return blocks_written_; }
 
+  /// Both ways: the blocks-written counter and the `num_rows` block rows (diagonal, neighbour
+  /// count, neighbours in storage order); reading replaces the matrix and checks the neighbour
+  /// lists and that the two stored halves are exact transposes
+  /// (core/serialization/map_serialization.h).
+  template <class Archive>
+  void serialize(Archive& ar, std::uint32_t num_rows);
+
  private:
-  friend struct MapCodecAccess;  // checkpoints: serialization/map_codec.cpp
   struct Entry {
     int col;
     Block block;

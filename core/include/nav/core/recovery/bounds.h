@@ -154,9 +154,12 @@ class CovarianceBounds {
   /// L frozen at the last set_recovery (the one the certificate uses).
   double certificate_lambda() const { return certificate_lambda_; }
   int num_bounds() const { return num_bounds_; }
+  /// Both ways; reading replaces the bounds and requires every bound to belong to a delayed
+  /// state 1..num_filter_blocks-1 (core/serialization/map_serialization.h, section "BNDS").
+  template <class Archive>
+  void serialize(Archive& ar, int num_filter_blocks);
 
  private:
-  friend struct MapCodecAccess;  // checkpoints: serialization/map_codec.cpp
   struct Entry {
     bool present = false;
     Eigen::MatrixXd bound;

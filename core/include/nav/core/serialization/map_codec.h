@@ -1,5 +1,5 @@
 #pragma once
-// Serialisation of the map for checkpoints (issue "navd" §6): the ESDF (Λ, η, μ) and the
+// Serialisation of the map for checkpoints: the ESDF (Λ, η, μ) and the
 // Algorithm 1 covariance bounds, as sections of the container of sections.h. Restoring gives
 // back objects whose every later operation is bit-identical to the original's: all doubles are
 // stored as their bit patterns and Λ's block rows keep their storage order (the order in which
@@ -19,6 +19,8 @@
 //   StateRecovery carries between solves; its preconditioner is refactored every solve):
 //   u32 d, matrix (n*d) x (1 + d).
 // (matrix = u32 rows, u32 cols, values; values = doubles column-major, little-endian.)
+// Each layout is written and read by ONE serialize function per type (map_serialization.h,
+// archive.h), so encoder and decoder cannot disagree.
 //
 // Decoding checks every size against the bytes present before allocating, every index range,
 // that the two stored halves of Λ are exact transposes and the diagonal blocks exactly

@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "nav/daemon/measurement.h"
+#include "nav/daemon/queue/measurements.h"
 
 namespace nav::daemon {
 

@@ -20,7 +20,7 @@
 #include <memory>
 #include <navlcm/registration_t.hpp>
 
-#include "nav/daemon/registration_table.h"
+#include "nav/daemon/filter/registration_message.h"
 
 namespace nav::daemon {
 

@@ -20,7 +20,7 @@
 #include <optional>
 #include <vector>
 
-#include "nav/daemon/measurement.h"
+#include "nav/daemon/queue/measurements.h"
 
 namespace nav::daemon {
 

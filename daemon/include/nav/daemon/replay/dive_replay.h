@@ -27,9 +27,11 @@
 #include <Eigen/Core>
 
 #include "nav/daemon/config/config.h"
-#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/queue/measurement_queue.h"
-#include "nav/daemon/registration_table.h"
+#include "nav/daemon/filter/registration_message.h"
+#include "nav/core/navigation/nav_filter.h"
+#include "nav/core/navigation/registration_table.h"
 #include "nav/daemon/sources/dive_log_source.h"
 #include "nav/daemon/queue/time_ordering.h"
 

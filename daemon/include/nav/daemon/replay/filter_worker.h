@@ -16,8 +16,8 @@
 #include <thread>
 #include <vector>
 
-#include "nav/daemon/filter/nav_filter.h"
-#include "nav/daemon/measurement.h"
+#include "nav/daemon/filter/filter_options.h"
+#include "nav/daemon/queue/measurements.h"
 
 namespace nav::daemon {
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "nav/core/filter/information_matrix.h"
-#include "nav/daemon/filter/nav_filter.h"
+#include "nav/core/navigation/nav_filter.h"
 #include "nav/daemon/replay/dive_replay.h"
 
 namespace nav::daemon {

@@ -1,13 +1,13 @@
 #pragma once
 // Innovation fields of health_t.sensors (sensor_health_t updates, rejected_updates, nis_mean,
 // nis_expected, nis_last, last[]) from NavFilter's cumulative per-sensor records
-// (nav/daemon/filter/innovation_stats.h). The mean NIS is over the health period: the
+// (nav/core/navigation/innovation_stats.h). The mean NIS is over the health period: the
 // difference of this snapshot and the previous one.
 
 #include <navlcm/sensor_health_t.hpp>
 #include <vector>
 
-#include "nav/daemon/filter/innovation_stats.h"
+#include "nav/daemon/filter/filter_options.h"
 
 namespace nav::daemon::service {
 

@@ -16,8 +16,9 @@
 #include <vector>
 
 #include "nav/daemon/config/config.h"
-#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/service/solution_board.h"
+#include "nav/core/navigation/nav_filter.h"
 
 namespace lcm {
 class LCM;

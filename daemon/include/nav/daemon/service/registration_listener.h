@@ -17,8 +17,9 @@
 #include <thread>
 
 #include "nav/daemon/config/config.h"
-#include "nav/daemon/filter/nav_filter.h"
+#include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/queue/registration_inbox.h"
+#include "nav/core/navigation/nav_filter.h"
 
 namespace lcm {
 class LCM;

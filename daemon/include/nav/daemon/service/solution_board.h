@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "nav/core/geometry/types.h"
-#include "nav/daemon/filter/innovation_stats.h"
+#include "nav/daemon/filter/filter_options.h"
 
 namespace nav::daemon::service {
 

@@ -25,7 +25,8 @@
 
 #include "nav/daemon/config/config.h"
 #include "nav/daemon/queue/measurement_queue.h"
-#include "nav/daemon/registration_table.h"
+#include "nav/daemon/filter/registration_message.h"
+#include "nav/core/navigation/registration_table.h"
 #include "nav/daemon/sources/sensor_decoder.h"
 
 namespace nav::daemon {

@@ -43,7 +43,7 @@
 #include <vector>
 
 #include "nav/daemon/config/config.h"
-#include "nav/daemon/measurement.h"
+#include "nav/daemon/queue/measurements.h"
 #include "nav/drivers/transports/can_bus.h"
 
 namespace nav::daemon {

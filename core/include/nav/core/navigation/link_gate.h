@@ -1,0 +1,79 @@
+#pragma once
+// Camera links between delayed states (Eustice et al., RSS 2005 sec. IV): which pairs to
+// propose from the Algorithm 1 bounds, and the gate and linearisation of a registered pair.
+//
+// Proposal test: with Δ = p_i − p_r (world x, y) and its covariance C from the certified
+// proposal joint [Σ_rr Σ_ri; Σ_ir Σ~_ii], the pair is proposed when the confidence ellipse
+// Δᵀ C⁻¹ Δ <= chi2(2 dof, confidence) can reach within D of the origin, tested as
+//   ‖Δ‖ − sqrt(chi2 · λmax(C)) < D,   D = r_i + r_j + 2 ‖lever_xy‖,
+// r = altitude · footprint half-diagonal per metre (the two images' footprints can touch).
+//
+// Gate: d² = νᵀ (H J Hᵀ + R)⁻¹ ν with ν = z − h(μ_i, μ_j) (angles wrapped), H = [H_j H_i] and
+// J = [Σ^_jj Σ^_ji; Σ^_ij Σ~_ii]: the proposal joint WITHOUT the truncation inflation ε I of
+// bounds.h (that isotropic term, in m² and rad² alike, is tens of degrees on the rotation rows
+// after a few PCG iterations and would let any outlier through; proposal keeps it so that no
+// pair is missed). Accepted when d² <= the 5-dof gate (chi_square.h).
+//
+// Linearisation: an accepted link is linearised at the iterated-EKF point of the robot (state i
+// held at its mean; link_linearisation.h), not at the possibly stale mean: after a camera-off
+// transit with a DVL dropout the mean can be metres off on a baseline of a few metres, and a
+// bearing link linearised there moves the map to the wrong place.
+
+#include <Eigen/Core>
+#include <functional>
+#include <string>
+
+#include "nav/core/filter/esdf.h"
+#include "nav/core/models/binary_models.h"
+#include "nav/core/navigation/link_linearisation.h"
+#include "nav/core/navigation/nav_filter_records.h"
+#include "nav/core/navigation/registration_table.h"
+#include "nav/core/recovery/bounds.h"
+#include "nav/core/recovery/state_recovery.h"
+
+namespace nav::core {
+
+using WarningSink = std::function<void(const std::string&)>;
+
+class LinkProposer {
+ public:
+  /// confidence in (0, 1); footprint half-diagonal per metre of altitude; the camera's mount.
+  LinkProposer(double confidence, double footprint_per_altitude, const Vec6& x_body_camera);
+
+  /// The proposal test (file comment) for delayed state `block` (image altitude altitude_i_m)
+  /// against the robot (altitude_j_m); on a proposal fills `joint` from the bounds.
+  bool propose(const Esdf& filter, const CovarianceBounds& bounds, const StateRecovery& recovery,
+               int block, double altitude_i_m, double altitude_j_m, LinkProposal* joint) const;
+
+ private:
+  double chi2_2dof_;
+  double footprint_per_altitude_;
+  double lever_xy_m_;
+};
+
+class LinkGate {
+ public:
+  LinkGate(double gate_chi2, WarningSink warn) : gate_chi2_(gate_chi2), warn_(std::move(warn)) {}
+
+  /// The joint without the truncation inflation: [Σ^_rr Σ^_ri; Σ^_ir Σ~_ii].
+  static Eigen::MatrixXd gate_joint(const LinkProposal& proposal);
+  /// The gate at the means x0 = [x_j; x_i] with the joint covariance: fills the link's
+  /// innovation and Mahalanobis distance; true when it passes.
+  bool pass(const CameraRelativePoseModel& camera, const LinkPair& x0,
+            const Eigen::MatrixXd& joint_cov, const RegistrationResult& reg,
+            LinkRecord& link) const;
+  /// The accepted link's linearisation at the robot's iterated point, or at the means where
+  /// the iteration fails.
+  LinkLinearisation linearise(const CameraRelativePoseModel& camera, const LinkPair& x0,
+                              const Eigen::MatrixXd& joint_cov, const RegistrationResult& reg,
+                              const LinkRecord& link) const;
+
+ private:
+  double gate_chi2_;
+  WarningSink warn_;
+};
+
+/// a - b with the attitude components of both blocks wrapped to (-π, π].
+LinkPair wrapped_difference(const LinkPair& a, const LinkPair& b);
+
+}  // namespace nav::core

@@ -1,0 +1,152 @@
+// Link proposal from the bounds, the 5-dof gate and the iterated linearisation point
+// (navigation/link_gate.h, navigation/link_linearisation.h).
+#include "nav/core/navigation/link_gate.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "nav/core/geometry/rotation.h"
+#include "nav/core/navigation/chi_square.h"
+
+namespace nav::core {
+namespace {
+
+constexpr int kD = 12;  // block dimension
+
+}  // namespace
+
+LinkProposer::LinkProposer(double confidence, double footprint_per_altitude,
+                           const Vec6& x_body_camera)
+    : chi2_2dof_(chi_square_quantile(confidence, 2)),
+      footprint_per_altitude_(footprint_per_altitude),
+      lever_xy_m_(x_body_camera.head<2>().norm()) {}
+
+bool LinkProposer::propose(const Esdf& filter, const CovarianceBounds& bounds,
+                           const StateRecovery& recovery, int block, double altitude_i_m,
+                           double altitude_j_m, LinkProposal* joint) const {
+  // The test needs only the 2x2 horizontal parts of the joint: computed first (the same
+  // numbers as from the full joint), the 24x24 joint is built for the proposed pairs only.
+  const Eigen::Matrix2d sigma_ir_xy = recovery.solution().block<2, 2>(Eigen::Index{block} * kD, 1);
+  Eigen::Matrix2d C;
+  if (!bounds.offset_covariance_2d(block, sigma_ir_xy, &C).ok()) return false;
+  const Eigen::Vector2d delta =
+      filter.mean_block(block).head<2>() - filter.mean_block(Esdf::kRobotBlock).head<2>();
+  const double lambda_max =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(C, Eigen::EigenvaluesOnly).eigenvalues()(1);
+  const double reach_m = altitude_i_m * footprint_per_altitude_ +
+                         altitude_j_m * footprint_per_altitude_ + 2.0 * lever_xy_m_;
+  if (!(delta.norm() - std::sqrt(chi2_2dof_ * std::max(lambda_max, 0.0)) < reach_m)) {
+    return false;
+  }
+  return bounds.propose(block, recovery.cross_covariance(block), joint).ok();
+}
+
+/// The joint without the truncation inflation: [Σ^_rr Σ^_ri; Σ^_ir Σ~_ii] (nav_filter.h "Gate").
+Eigen::MatrixXd LinkGate::gate_joint(const LinkProposal& p) {
+  Eigen::MatrixXd joint = p.joint;
+  joint.topLeftCorner(kD, kD).diagonal().array() -= p.epsilon_robot + p.epsilon_state;
+  joint.bottomRightCorner(kD, kD).diagonal().array() -= p.epsilon_state;
+  return joint;
+}
+
+/// The 5-dof gate at the means x0 = [x_j; x_i] with the joint covariance: fills the link's
+/// innovation and Mahalanobis distance; true when it passes (nav_filter.h "Gate").
+bool LinkGate::pass(const CameraRelativePoseModel& camera, const LinkPair& x0,
+                    const Eigen::MatrixXd& joint_cov, const RegistrationResult& reg,
+                    LinkRecord& link) const {
+  const auto x_r = x0.head<kD>(), x_i = x0.tail<kD>();
+  if (camera.baseline_is_degenerate(x_i, x_r)) return false;
+  try {
+    MeasJac H_i, H_r;
+    MeasVec nu = reg.z - camera.predict(x_i, x_r, &H_i, &H_r);
+    for (int row = 0; row < 5; ++row) nu(row) = wrap_angle(nu(row));
+    Eigen::Matrix<double, 5, 2 * kD> H;
+    H << H_r, H_i;
+    const Eigen::Matrix<double, 5, 5> S = H * joint_cov * H.transpose() + reg.covariance;
+    const Eigen::LDLT<Eigen::Matrix<double, 5, 5>> ldlt(S);
+    link.innovation = nu;
+    link.mahalanobis_sq = nu.dot(ldlt.solve(nu));
+    return ldlt.info() == Eigen::Success && std::isfinite(link.mahalanobis_sq) &&
+           link.mahalanobis_sq <= gate_chi2_;
+  } catch (const std::exception& e) {
+    if (warn_) {
+      warn_("NavFilter: camera model for frames " + std::to_string(link.frame_i) + "-" +
+            std::to_string(link.frame_j) + ": " + e.what());
+    }
+    return false;
+  }
+}
+
+/// The accepted link's linearisation at the robot's iterated point (link_linearisation.h;
+/// nav_filter.h "Link update"), or at the means where the iteration fails.
+LinkLinearisation LinkGate::linearise(const CameraRelativePoseModel& camera, const LinkPair& x0,
+                                      const Eigen::MatrixXd& joint_cov,
+                                      const RegistrationResult& reg,
+                                      const LinkRecord& link) const {
+  LinkLinearisation lin;
+  try {
+    // Only the robot moves: J's robot block is the recovered Σ_rr, while state i's is its
+    // conservative bound (loose by orders of magnitude), which would drag x_i to the link.
+    Eigen::MatrixXd robot_only = Eigen::MatrixXd::Zero(2 * kD, 2 * kD);
+    robot_only.topLeftCorner(kD, kD) = joint_cov.topLeftCorner(kD, kD);
+    lin = iterated_link_point(camera, x0, robot_only, reg.z, reg.covariance);
+  } catch (const std::exception& e) {  // a degenerate iterate: the mean is the point
+    if (warn_) {
+      warn_("NavFilter: camera link " + std::to_string(link.frame_i) + "-" +
+            std::to_string(link.frame_j) + " not iterated: " + e.what());
+    }
+    lin = LinkLinearisation{};
+    lin.x = x0;
+    lin.h = camera.predict(x0.tail<kD>(), x0.head<kD>(), &lin.H_i, &lin.H_r);
+  }
+  return lin;
+}
+
+/// a - b with the attitude components wrapped to (-π, π].
+LinkPair wrapped_difference(const LinkPair& a, const LinkPair& b) {
+  LinkPair d = a - b;
+  for (int k = 3; k < 6; ++k) {
+    d[k] = wrap_angle(d[k]);
+    d[kD + k] = wrap_angle(d[kD + k]);
+  }
+  return d;
+}
+
+LinkLinearisation iterated_link_point(const CameraRelativePoseModel& camera,
+                                      const LinkPair& x0, const Eigen::MatrixXd& joint,
+                                      const MeasVec& z, const MeasCov& R) {
+  constexpr int kMaxIterations = 10;
+  constexpr double kConverged = 1e-9;  // step norm (m, rad)
+  LinkLinearisation l;
+  l.x = x0;
+  for (;;) {
+    l.h = camera.predict(l.x.tail<kD>(), l.x.head<kD>(), &l.H_i, &l.H_r);
+    if (l.iterations == kMaxIterations) return l;
+    Eigen::Matrix<double, 5, 2 * kD> H;
+    H << l.H_r, l.H_i;
+    Eigen::Matrix<double, 2 * kD, 1> dx = x0 - l.x;
+    for (int k = 3; k < 6; ++k) {  // Euler angles of both blocks along the shorter arc
+      dx[k] = wrap_angle(dx[k]);
+      dx[kD + k] = wrap_angle(dx[kD + k]);
+    }
+    MeasVec r = z - l.h;
+    wrap_angle_rows(camera, r);
+    const Eigen::Matrix<double, 5, 1> nu = r - H * dx;
+    const Eigen::Matrix<double, 5, 5> S = H * joint * H.transpose() + R;
+    const Eigen::Matrix<double, 2 * kD, 1> next =
+        x0 + joint * H.transpose() * Eigen::LDLT<Eigen::Matrix<double, 5, 5>>(S).solve(nu);
+    if (!next.allFinite()) return l;
+    const double step = (next - l.x).norm();
+    l.x = next;
+    ++l.iterations;
+    if (step < kConverged) {
+      l.h = camera.predict(l.x.tail<kD>(), l.x.head<kD>(), &l.H_i, &l.H_r);
+      return l;
+    }
+  }
+}
+
+}  // namespace nav::core

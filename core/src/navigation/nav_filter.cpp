@@ -1,0 +1,389 @@
+// NavFilter: initialisation, prediction, robot updates and images (navigation/nav_filter.h).
+// Links: nav_filter_links.cpp; recovery: nav_filter_recovery.cpp.
+#include "nav/core/navigation/nav_filter.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "nav/core/geometry/rotation.h"
+#include "nav/core/navigation/chi_square.h"
+
+namespace nav::core {
+namespace {
+
+constexpr double kInitialSigmaFactor = 10.0;
+
+Status error(StatusCode code, const std::string& what) {
+  return Status::Error(code, "NavFilter: " + what);
+}
+
+/// The filter's own StateRecovery: with a recovery executor it only evaluates the residual of
+/// the extended warm start (0 PCG iterations, the certificate of bounds.h); the iterations run
+/// as the executor's jobs.
+StateRecoveryOptions filter_thread_recovery(const NavFilterOptions& options) {
+  if (!options.recovery_thread) return options.recovery;
+  StateRecoveryOptions o = options.recovery;
+  o.mode = RecoveryMode::kFixedIterations;
+  o.iterations_per_step = 0;
+  return o;
+}
+
+
+/// The options, checked (std::invalid_argument naming the values otherwise).
+NavFilterOptions validated(NavFilterOptions o) {
+  if (!(o.max_predict_step_s > 0.0) ||
+      !(o.min_predict_step_s >= 0.0 && o.min_predict_step_s < o.max_predict_step_s) ||
+      !(o.default_altitude_m > 0.0) ||
+      !(o.proposal_confidence > 0.0 && o.proposal_confidence < 1.0) ||
+      !(o.camera_gate_chi2 > 0.0) || !(o.initial_xy_sigma_m > 0.0) ||
+      !(o.initial_velocity_sigma_mps > 0.0) || !(o.initial_rate_sigma_radps > 0.0)) {
+    throw std::invalid_argument(
+        "NavFilterOptions: max_predict_step_s, default_altitude_m, camera_gate_chi2 and the "
+        "initial sigmas must be > 0, min_predict_step_s in [0, max_predict_step_s), "
+        "proposal_confidence in (0, 1)");
+  }
+  if (!(o.recovery_handoff_s >= 0.0 && o.recovery_handoff_s <= 3600.0)) {
+    throw std::invalid_argument("NavFilterOptions: recovery_handoff_s must be in [0, 3600] s, is " +
+                                std::to_string(o.recovery_handoff_s));
+  }
+  return o;
+}
+
+/// The recovery jobs' schedule: none without recovery_thread. The job's iterate is certified
+/// by the filter on its current Λ at the next image (true residual there), so the job skips its
+/// own final residual product.
+RecoverySchedule make_schedule(const NavFilterOptions& o) {
+  if (!o.recovery_thread) return {};
+  StateRecoveryOptions job = o.recovery;
+  job.recompute_true_residual = false;
+  std::unique_ptr<RecoveryExecutor> executor =
+      o.recovery_executor ? o.recovery_executor(12, job)
+                          : std::make_unique<InlineRecoveryExecutor>(12, job);
+  return RecoverySchedule(std::move(executor), o.recovery_handoff_s);
+}
+
+Vec6 camera_mount(const SensorModels& sensors) {
+  return sensors.camera() ? sensors.camera()->x_body_camera : Vec6::Zero();
+}
+
+}  // namespace
+
+const char* to_string(LinkOutcome outcome) {
+  switch (outcome) {
+    case LinkOutcome::kAccepted: return "accepted";
+    case LinkOutcome::kGated: return "gated";
+    case LinkOutcome::kRegistrationFailed: return "registration_failed";
+    case LinkOutcome::kNotRegistered: return "not_registered";
+  }
+  return "unknown";
+}
+
+NavFilter::NavFilter(NavFilterOptions options, const RegistrationTable* registrations)
+    : options_(validated(std::move(options))),
+      sensors_(options_.sensors),
+      registrations_(registrations),
+      process_(options_.process_noise),
+      recovery_(12, filter_thread_recovery(options_)),
+      bounds_(12, options_.bounds),
+      jobs_(make_schedule(options_)),
+      proposer_(options_.proposal_confidence, sensors_.footprint_radius_per_altitude(),
+                camera_mount(sensors_)),
+      gate_(options_.camera_gate_chi2, options_.warn),
+      pending_(options_.registration_wait_s, options_.max_pending_registrations),
+      altitude_m_(options_.default_altitude_m) {
+  image_of_block_.push_back(-1);
+}
+
+void NavFilter::restore_map(Esdf filter, CovarianceBounds bounds, StateRecovery recovery) {
+  filter_ = std::move(filter);
+  bounds_ = std::move(bounds);
+  recovery_ = std::move(recovery);
+}
+
+std::string NavFilter::index_error() const {
+  const long images = static_cast<long>(images_.size());
+  const int blocks = filter_.num_blocks();
+  // One entry per block (the robot's, -1, exists before initialisation too).
+  if (image_of_block_.size() > static_cast<std::size_t>(std::max(blocks, 1))) {
+    return "block -> image map has " + std::to_string(image_of_block_.size()) + " entries for " +
+           std::to_string(blocks) + " blocks";
+  }
+  for (long i : image_of_block_) {
+    if (i < -1 || i >= images) return "block -> image map names image " + std::to_string(i);
+  }
+  if (pending_image_ < -1 || pending_image_ >= images) {
+    return "pending image " + std::to_string(pending_image_) + " of " + std::to_string(images);
+  }
+  for (std::size_t l : pending_links_) {
+    if (l >= links_.size()) return "pending link " + std::to_string(l) + " unknown";
+  }
+  for (const ImageRecord& im : images_) {
+    if (im.state < -1 || im.state >= blocks) {
+      return "image state " + std::to_string(im.state) + " unknown";
+    }
+  }
+  for (const LinkRecord& l : links_) {
+    if (l.state_i < -1 || l.state_j < -1 || l.state_i >= blocks || l.state_j >= blocks) {
+      return "link state unknown";
+    }
+  }
+  if (warm_.kept < -1 || warm_.kept >= blocks) return "kept block unknown";
+  if (init_.roll_pitch_sensor >= sensors_.num_sensors() ||
+      init_.heading_sensor >= sensors_.num_sensors()) {
+    return "initialisation sensor index unknown";
+  }
+  return {};
+}
+
+void NavFilter::warn(const std::string& message) const {
+  if (options_.warn) options_.warn(message);
+}
+
+const ImageRecord* NavFilter::image_of_state(int block) const {
+  if (block <= 0 || static_cast<std::size_t>(block) >= image_of_block_.size()) return nullptr;
+  const long i = image_of_block_[static_cast<std::size_t>(block)];
+  return i < 0 ? nullptr : &images_[static_cast<std::size_t>(i)];
+}
+
+Status NavFilter::process(const Measurement& m) {
+  ++counters_.measurements;
+  const std::int64_t t_us = validity_us(m);
+  if (!initialised_) return try_initialise(m);
+  if (t_us < last_validity_us_) {
+    ++counters_.out_of_order;
+    return Status::Ok();
+  }
+  last_validity_us_ = t_us;
+  now_realtime_us_ = time_of(m).host_realtime_us;
+  if (jobs_.due(t_us)) take_recovery_result();  // hand-off at a data time
+  // Less than min_predict_step_s after the filter's time: applied at that time (a very short
+  // prediction makes Q's pose block tiny and Λ ill-conditioned).
+  const auto min_step_us = static_cast<std::int64_t>(std::llround(options_.min_predict_step_s * 1e6));
+  if (t_us - time_us_ >= min_step_us) {
+    if (Status s = advance_to(t_us); !s.ok()) return s;
+  }
+  pending_.resolve_due(registrations_, now_realtime_us_,
+                       [this](PendingRegistrations::Entry& e, const RegistrationResult* reg) {
+                         finish_pending(e, reg);
+                       });
+  if (const auto* image = std::get_if<ImageEvent>(&m)) return on_image(*image);
+  update_robot(m);
+  return Status::Ok();
+}
+
+Status NavFilter::try_initialise(const Measurement& m) {
+  if (init_.held.empty()) init_.first_time_us = validity_us(m);
+  if (init_.held.size() < kMaxHeld) {
+    init_.held.push_back(m);
+  } else {
+    ++counters_.before_initialisation;  // dropped: no attitude/depth for too long
+  }
+  if (const auto* att = std::get_if<Attitude>(&m)) {
+    const BodyAttitude body = sensors_.body_attitude(*att);
+    if (body.has_roll_pitch) {
+      init_.roll_pitch = body;
+      init_.roll_pitch_sensor = att->time.sensor_index;
+    }
+    if (body.has_heading) {
+      init_.heading = body;
+      init_.heading_sensor = att->time.sensor_index;
+    }
+  } else if (const auto* depth = std::get_if<Depth>(&m)) {
+    init_.depth = *depth;
+  }
+  if (!(init_.roll_pitch && init_.heading && init_.depth)) return Status::Ok();
+  // The world origin is the vehicle at the start of the dive (hil-tests/README.md): start at
+  // the first measurement's time and replay everything held so far through the filter.
+  if (Status s = initialise(init_.first_time_us); !s.ok()) return s;
+  std::vector<Measurement> held;
+  held.swap(init_.held);
+  counters_.measurements -= held.size();  // counted again below
+  for (const Measurement& h : held) {
+    if (Status s = process(h); !s.ok()) return s;
+  }
+  return Status::Ok();
+}
+
+Status NavFilter::initialise(std::int64_t t_us) {
+  const std::size_t depth_sensor = init_.depth->time.sensor_index;
+  const Vec3 rpy(init_.roll_pitch->roll_rad, init_.roll_pitch->pitch_rad,
+                 init_.heading->heading_rad);
+  const Vec3 lever = sensors_.depth(depth_sensor).p_body_sensor_m;
+  Vec12 x0 = Vec12::Zero();
+  x0(2) = init_.depth->depth_m - (rotation_from_euler(rpy) * lever)(2);
+  x0.segment<3>(3) = rpy;
+  Vec12 sigma;
+  sigma << options_.initial_xy_sigma_m, options_.initial_xy_sigma_m,
+      std::sqrt(sensors_.depth_noise(depth_sensor)(0, 0)), 0, 0, 0,
+      Vec3::Constant(options_.initial_velocity_sigma_mps),
+      Vec3::Constant(options_.initial_rate_sigma_radps);
+  // Attitude prior: the attitude sensor's own noise (the first message is a measurement).
+  // Attitude and depth priors 10x the sensors' sigmas: the messages they come from are applied
+  // again as measurement updates once the held measurements are replayed.
+  sigma(2) *= kInitialSigmaFactor;
+  sigma(3) = sigma(4) =
+      kInitialSigmaFactor * std::sqrt(sensors_.roll_pitch_noise(init_.roll_pitch_sensor)(0, 0));
+  sigma(5) = kInitialSigmaFactor * std::sqrt(sensors_.heading_noise(init_.heading_sensor)(0, 0));
+  const Mat12 P0 = sigma.array().square().matrix().asDiagonal();
+  if (Status s = filter_.initialize(x0, P0); !s.ok()) return s;
+  if (Status s = bounds_.initialize_robot(P0); !s.ok()) return s;
+  if (Status s = recovery_.initialize(x0, P0); !s.ok()) return s;
+  warm_.restart(P0);
+  initialised_ = true;
+  time_us_ = t_us;
+  last_validity_us_ = t_us;
+  return Status::Ok();
+}
+
+Status NavFilter::advance_to(std::int64_t t_us) {
+  // Equal steps of at most max_predict_step_s (no short remainder step, see min_predict_step_s).
+  const auto max_step_us = std::max<std::int64_t>(
+      1, static_cast<std::int64_t>(std::llround(options_.max_predict_step_s * 1e6)));
+  const std::int64_t gap_us = t_us - time_us_;
+  const std::int64_t steps = (gap_us + max_step_us - 1) / max_step_us;
+  for (std::int64_t k = 1; k <= steps; ++k) {
+    const std::int64_t next_us = time_us_ + (t_us - time_us_) / (steps - k + 1);
+    if (Status s = predict_once(static_cast<double>(next_us - time_us_) * 1e-6); !s.ok()) {
+      return s;
+    }
+    time_us_ = next_us;
+  }
+  return Status::Ok();
+}
+
+Status NavFilter::predict_once(double dt_s) {
+  relinearise_robot();
+  const Vec12 x = filter_.mean_block(Esdf::kRobotBlock);
+  Mat12 F;
+  Vec12 f;
+  Mat12 Q;
+  try {
+    f = process_.predict(x, dt_s, &F);
+    Q = process_.process_noise(x, dt_s);
+  } catch (const std::exception& e) {
+    return error(StatusCode::kOutOfRange,
+                 "prediction at t = " + std::to_string(time_us_) + " us: " + e.what());
+  }
+  const bool keep = pending_image_ >= 0;
+  int kept = -1;  // the block keeping the pending image
+  if (Status s = filter_.predict(f, F, Q, keep, &kept); !s.ok()) return s;
+  if (Status s = bounds_.predict_robot(F, Q, keep, kept); !s.ok()) return s;
+  ++counters_.predictions;
+  warm_.predicted_with(F, Q, keep ? kept : -1);
+  if (keep) {
+    if (image_of_block_.size() <= static_cast<std::size_t>(kept)) {
+      image_of_block_.resize(static_cast<std::size_t>(kept) + 1, -1);
+    }
+    image_of_block_[static_cast<std::size_t>(kept)] = pending_image_;
+    ImageRecord& kept_image = images_[static_cast<std::size_t>(pending_image_)];
+    kept_image.state = kept;
+    kept_image.initial_bound = bounds_.bound(kept).topLeftCorner(6, 6);
+    for (std::size_t row : pending_links_) links_[row].state_j = kept;
+    pending_links_.clear();
+    pending_image_ = -1;
+  }
+  return Status::Ok();
+}
+
+void NavFilter::relinearise_robot() {
+  const InformationMatrix& info = filter_.information();
+  const int r = Esdf::kRobotBlock;
+  Vec12 b = filter_.information_vector().head<12>();
+  for (int k = 0; k < info.num_neighbours(r); ++k) {
+    b.noalias() -= info.neighbour_block(r, k) * filter_.mean_block(info.neighbour(r, k));
+  }
+  const Eigen::LLT<Mat12> llt(Mat12(info.diagonal_block(r)));
+  if (llt.info() != Eigen::Success) return;
+  // Not wrapped: the angles of the mean must stay on the branch η encodes. Wrapping only μ_r
+  // (η_r unchanged) shifts the next update's η_r += Hᵀ R⁻¹ (ν + H μ_r) by 2π·Hᵀ R⁻¹ H on a
+  // heading that crossed ±π, which moved the whole map 5.4 m in one turn of the default dive.
+  const Vec12 robot = llt.solve(b);
+  if (robot.allFinite()) (void)filter_.set_mean_block(r, robot);
+}
+
+template <class Model>
+void NavFilter::fuse(const AidObservation<Model>& aid) {
+  const int r = Esdf::kRobotBlock;
+  MeasJac H;
+  const MeasVec h = aid.model.predict(filter_.mean_block(r), &H);  // as the update below
+  const InnovationSample innovation = innovation_sample(aid.model, aid.z, h, H, warm_.P, aid.R);
+  const Status s = filter_.update(aid.model, r, aid.z, aid.R);
+  innovations_.record(sensors_, aid.sensor, aid.kind, time_us_, aid.z, aid.R, innovation, s.ok());
+  if (s.ok()) {
+    ++counters_.updates;
+    if (!bounds_.update_robot(H, aid.R).ok()) ++counters_.bound_update_failures;
+    warm_.updated_with(H, aid.R);
+    return;
+  }
+  ++counters_.update_failures;
+  warn(std::string("NavFilter: ") + aid.kind + " update from sensor '" + sensors_.name(aid.sensor) +
+       "' at t = " + std::to_string(time_us_) + " us rejected: " + s.to_string());
+}
+
+void NavFilter::update_robot(const Measurement& m) {
+  const std::size_t sensor = time_of(m).sensor_index;
+  try {
+    if (const auto* dvl = std::get_if<DvlVelocity>(&m)) {
+      fuse(dvl_velocity_aid(sensors_, *dvl));
+    } else if (const auto* att = std::get_if<Attitude>(&m)) {
+      const BodyAttitude body = sensors_.body_attitude(*att);
+      if (body.has_roll_pitch) fuse(roll_pitch_aid(sensors_, sensor, body));
+      if (body.has_heading) fuse(heading_aid(sensors_, sensor, body));
+    } else if (const auto* depth = std::get_if<Depth>(&m)) {
+      fuse(depth_aid(sensors_, *depth));
+    } else if (const auto* alt = std::get_if<Altitude>(&m)) {
+      if (alt->altitude_m > 0.0 && std::isfinite(alt->altitude_m)) altitude_m_ = alt->altitude_m;
+      ++counters_.unused;
+    } else {
+      ++counters_.unused;  // angular rates: no rate model in the filter
+    }
+  } catch (const std::out_of_range& e) {
+    ++counters_.update_failures;
+    warn(std::string("NavFilter: ") + e.what());
+  }
+}
+
+Status NavFilter::on_image(const ImageEvent& image) {
+  if (pending_image_ >= 0) {
+    ++counters_.duplicate_images;  // a second image at the same time of validity
+    return Status::Ok();
+  }
+  ++counters_.images;
+  ImageRecord record;
+  record.t_us = image.time.validity_us;
+  record.frame_id = image.frame_id;
+  record.altitude_m = altitude_m_;
+  images_.push_back(record);
+  ImageRecord& current = images_.back();
+  const bool recovered = recover();
+  current.relative_residual = last_relative_residual_;
+  if (recovered) {
+    current.robot_covariance = recovery_.robot_covariance();
+    if (options_.propose_links && sensors_.camera()) propose_and_link(current);
+  }
+  relinearise_robot();
+  current.robot_mean = filter_.mean_block(Esdf::kRobotBlock);
+  pending_image_ = static_cast<long>(images_.size()) - 1;
+  if (jobs_.enabled()) {
+    jobs_.submit(filter_.information(), filter_.information_vector(), recovery_.solution(),
+                 time_us_);
+  }
+  return Status::Ok();
+}
+
+Status NavFilter::finish() {
+  if (recovery_in_flight()) take_recovery_result();
+  pending_.expire_all([this](PendingRegistrations::Entry& e, const RegistrationResult* reg) {
+    finish_pending(e, reg);  // never answered
+  });
+  if (!initialised_ || pending_image_ < 0) return Status::Ok();
+  const std::int64_t step_us = 100'000;  // 0.1 s: keeps the last image's state
+  if (Status s = predict_once(1e-6 * static_cast<double>(step_us)); !s.ok()) return s;
+  time_us_ += step_us;
+  return Status::Ok();
+}
+
+}  // namespace nav::core

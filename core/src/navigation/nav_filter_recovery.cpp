@@ -1,0 +1,115 @@
+// NavFilter state recovery at images: the warm-start extension, the certificate handed to the
+// bounds, and the recovery executor's jobs (navigation/nav_filter.h "Image", "Recovery
+// executor"; the schedule: recovery_executor.h).
+#include <Eigen/Cholesky>
+#include <string>
+
+#include "nav/core/navigation/nav_filter.h"
+
+namespace nav::core {
+
+void NavFilter::extend_warm_start() {
+  if (warm_.predicted) {
+    const Vec12 robot = filter_.mean_block(Esdf::kRobotBlock);
+    const bool keep = warm_.kept >= 0;
+    // extend_for_prediction sets Σ'_rr = A Σ_tt Aᵀ + Q: choose Q so that it is the tracked P.
+    const Mat12 Q = warm_.P - warm_.A * warm_.sigma_tt * warm_.A.transpose();
+    if (Status s = recovery_.extend_for_prediction(warm_.A, Q, robot, keep, warm_.kept);
+        !s.ok()) {
+      warn("NavFilter: warm start extension failed (" + s.to_string() +
+           "); restarting from the filter mean");
+      Eigen::MatrixXd X = Eigen::MatrixXd::Zero(filter_.information().dim(), 13);
+      X.col(0) = filter_.mean();
+      (void)recovery_.set_solution(X);
+    }
+  }
+  warm_.extended();
+}
+
+bool NavFilter::certify(const RecoveryResult& result) {
+  warm_.restart(recovery_.robot_covariance());  // the next extension starts from this iterate
+  last_relative_residual_ = result.max_relative_residual;
+  counters_.max_cg_relative_residual =
+      std::max(counters_.max_cg_relative_residual, result.max_relative_residual);
+  if (!result.status.ok()) {
+    ++counters_.recovery_failures;
+    warn("NavFilter: recovery at t = " + std::to_string(time_us_) +
+         " us failed: " + result.status.to_string());
+    return false;
+  }
+  if (Status s = bounds_.set_recovery(recovery_.robot_covariance(),
+                                            result.column_residual_frobenius, filter_.num_blocks());
+      !s.ok()) {
+    ++counters_.recovery_failures;
+    warn("NavFilter: bounds certificate at t = " + std::to_string(time_us_) +
+         " us: " + s.to_string());
+    return false;
+  }
+  return true;
+}
+
+bool NavFilter::recover() {
+  if (recovery_in_flight()) take_recovery_result();
+  extend_warm_start();
+  // Synchronous: the PCG iterations; with jobs: 0 iterations, i.e. the true residual of the
+  // extended result of the last job on the current Λ (the certificate of bounds.h).
+  const RecoveryResult result =
+      recovery_.solve(filter_.information(), filter_.information_vector());
+  if (!jobs_.enabled()) ++counters_.recoveries;
+  if (!certify(result)) return false;
+  if (jobs_.enabled()) return true;  // the delayed states took the job's mean at its hand-off
+  const Eigen::VectorXd& recovered = recovery_.solution().col(0);
+  for (int b = 1; b < filter_.num_blocks(); ++b) {
+    (void)filter_.set_mean_block(b, recovered.segment(Eigen::Index{b} * 12, 12));
+  }
+  return true;
+}
+
+bool NavFilter::recover_now() {
+  if (!initialised_) return false;
+  if (!jobs_.enabled()) return recover();
+  if (recovery_in_flight()) take_recovery_result();
+  extend_warm_start();
+  jobs_.submit(filter_.information(), filter_.information_vector(), recovery_.solution(),
+               time_us_);
+  take_recovery_result();
+  const RecoveryResult result =
+      recovery_.solve(filter_.information(), filter_.information_vector());
+  return certify(result);
+}
+
+void NavFilter::take_recovery_result() {
+  const RecoveryOutput& out = jobs_.take();
+  ++counters_.recoveries;
+  if (!out.result.status.ok()) {
+    ++counters_.recovery_failures;
+    warn("NavFilter: recovery job taken at t = " + std::to_string(time_us_) +
+         " us failed: " + out.result.status.to_string());
+    return;
+  }
+  if (out.solution.rows() != recovery_.solution().rows() ||
+      out.solution.cols() != recovery_.solution().cols()) {
+    ++counters_.recovery_failures;
+    warn("NavFilter: recovery job's result has " + std::to_string(out.solution.rows()) +
+         " rows, the warm start " + std::to_string(recovery_.solution().rows()));
+    return;
+  }
+  // The job refined the snapshot's warm start; what the filter did since (predictions, robot
+  // updates, a kept state) is still in A, P and the kept block and extends the new iterate at
+  // the next image. P follows the new Σ_tt to first order: P += A (Σ'_tt − Σ_tt) Aᵀ.
+  const int d = 12;
+  Mat12 sigma_new = out.solution.block(0, 1, d, d);
+  sigma_new = 0.5 * (sigma_new + sigma_new.transpose()).eval();
+  const Mat12 P_new = warm_.P + warm_.A * (sigma_new - warm_.sigma_tt) * warm_.A.transpose();
+  // If P_new is not positive definite, keep the tracked P: the extension then uses
+  // Q = P − A Σ'_tt Aᵀ (a warm start only).
+  if (Eigen::LLT<Mat12>(P_new).info() == Eigen::Success) warm_.P = P_new;
+  warm_.sigma_tt = sigma_new;
+  (void)recovery_.set_solution(out.solution);
+  const Eigen::Index blocks = out.solution.rows() / d;
+  for (Eigen::Index b = 1; b < blocks; ++b) {
+    (void)filter_.set_mean_block(static_cast<int>(b), out.solution.col(0).segment(b * d, d));
+  }
+}
+
+}  // namespace nav::core
