@@ -2,7 +2,7 @@
 // bytes on LCM memq://, reconnection after the device vanishes), a DVL on CAN through the
 // transport interface (socketpair) and, when the kernel has one, a real CAN interface; queue
 // overflow (drops counted, thread alive); a camera through the Camera interface (ImageEvents,
-// NAV_IMAGE with thumbnail, 16-bit PNG); the health board's snapshot.
+// NAV_IMAGE with thumbnail, 16-bit PNG).
 #include "nav/daemon/sources/device_source.h"
 
 #include <arv.h>
@@ -486,26 +486,6 @@ TEST(DeviceSources, GigeCameraThreadOnAravisInProcessFake) {
   EXPECT_GT(sink.images.back().thumbnail_num_bytes, 0);
   EXPECT_EQ(sink.images.back().file_path, "images/" + frame_png_name(e.frame_id));
   fs::remove_all(dir);
-}
-
-TEST(SensorHealthBoard, SnapshotReportsActiveSensorsWithRates) {
-  NavdConfig config;
-  config.sensors.push_back(sensor("dvl", SensorType::kDvlPd0));
-  config.sensors.push_back(sensor("depth", SensorType::kPressureParo));
-  SensorHealthBoard board(config);
-  board.at(1).active = true;
-  board.at(1).messages = 10;
-  EXPECT_EQ(board.snapshot(1'000'000).size(), 1u);
-  board.at(1).messages = 30;
-  board.at(1).last_message_monotonic_us = 1'500'000;
-  board.at(1).reconnects = 2;
-  const auto s = board.snapshot(3'000'000);
-  ASSERT_EQ(s.size(), 1u);
-  EXPECT_EQ(s[0].name, "depth");
-  EXPECT_DOUBLE_EQ(s[0].rate_hz, 10.0);  // 20 records in 2 s
-  EXPECT_DOUBLE_EQ(s[0].last_message_age_s, 1.5);
-  EXPECT_EQ(s[0].reconnects, 2);
-  EXPECT_EQ(s[0].records, 30);
 }
 
 }  // namespace

@@ -15,7 +15,7 @@
 #include <opencv2/core.hpp>
 #include <string>
 
-#include "nav/testing/fake_camera_pattern.h"
+#include "fake_camera_pattern.h"
 
 namespace nav::drivers {
 namespace {

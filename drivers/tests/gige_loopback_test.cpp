@@ -14,8 +14,8 @@
 #include <string>
 #include <thread>
 
+#include "fake_camera_pattern.h"
 #include "nav/drivers/transports/gige_camera.h"
-#include "nav/testing/fake_camera_pattern.h"
 
 namespace nav::drivers {
 namespace {

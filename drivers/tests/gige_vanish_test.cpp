@@ -10,8 +10,8 @@
 #include <memory>
 #include <string>
 
+#include "fake_camera_pattern.h"
 #include "nav/drivers/transports/gige_camera.h"
-#include "nav/testing/fake_camera_pattern.h"
 
 namespace nav::drivers {
 namespace {

@@ -3,29 +3,20 @@
 // The 12-bit frames are real Sparus seafloor frames resampled to 1280x1024 under a strobe-like
 // falloff (the real frames are 384x288 8-bit); without the data folder the benchmarks skip.
 #include <benchmark/benchmark.h>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include <cmath>
 #include <filesystem>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string>
 
 #include "nav/vision/registration.h"
+#include "test_cameras.h"
 
 namespace {
 
 using namespace nav::vision;
-
-CameraIntrinsics sim_camera() {
-  CameraIntrinsics c;
-  c.fx_px = c.fy_px = 1000.0;
-  c.cx_px = 640.0;
-  c.cy_px = 512.0;
-  c.width_px = 1280;
-  c.height_px = 1024;
-  return c;
-}
 
 /// Sparus frame `name` as a 1280x1024 Mono12 strobe-lit frame; empty when the data is absent.
 cv::Mat twelve_bit_frame(const std::string& name) {
@@ -55,7 +46,7 @@ void BM_Features1280x1024Mono12(benchmark::State& state) {
     state.SkipWithError("shared data absent (NAV_DATA_DIR)");
     return;
   }
-  const Registration registration(sim_camera());
+  const Registration registration(test::sim_camera());
   std::size_t n = 0;
   for (auto _ : state) {
     const ImageFeatures f = registration.features(frame);
@@ -75,7 +66,7 @@ void BM_RegisterPair1280x1024(benchmark::State& state) {
   }
   RegistrationOptions options;
   options.essential.method = static_cast<RobustMethod>(state.range(0));
-  const Registration registration(sim_camera(), options);
+  const Registration registration(test::sim_camera(), options);
   const ImageFeatures fa = registration.features(a), fb = registration.features(b);
   RegistrationResult r;
   for (auto _ : state) {

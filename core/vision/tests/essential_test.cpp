@@ -5,28 +5,17 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
-
 #include <cmath>
+#include <opencv2/calib3d.hpp>
 #include <random>
 #include <vector>
 
-#include <opencv2/calib3d.hpp>
-
 #include "nav/core/geometry/rotation.h"
 #include "nav/vision/camera_model.h"
+#include "test_cameras.h"
 
 namespace nav::vision {
 namespace {
-
-CameraIntrinsics camera() {
-  CameraIntrinsics c;
-  c.fx_px = c.fy_px = 1000.0;
-  c.cx_px = 640.0;
-  c.cy_px = 512.0;
-  c.width_px = 1280;
-  c.height_px = 1024;
-  return c;
-}
 
 struct Scene {
   ImageFeatures i, j;
@@ -40,7 +29,7 @@ Scene make_scene(const Eigen::Matrix3d& R_i_j, const Eigen::Vector3d& t_i_j, dou
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::normal_distribution<double> noise(0.0, noise_px);
-  const CameraIntrinsics cam = camera();
+  const CameraIntrinsics cam = test::sim_camera();
   Scene s;
   while (static_cast<int>(s.matches.matches.size()) < n) {
     const Eigen::Vector3d p_i(u(rng) * 0.5 * depth_m, u(rng) * 0.4 * depth_m,
@@ -71,7 +60,8 @@ TEST(Essential, RecoversPoseWithOutliersByLmeds) {
   const Eigen::Matrix3d R = core::rotation_from_euler(Eigen::Vector3d(0.03, -0.02, 0.15));
   const Eigen::Vector3d t(0.6, 0.2, 0.05);
   const Scene s = make_scene(R, t, 3.0, 0.3, 0.5, 0.25, 300, 1);
-  const EssentialEstimate e = estimate_essential(s.i, s.j, s.matches, camera(), {}, nullptr);
+  const EssentialEstimate e =
+      estimate_essential(s.i, s.j, s.matches, test::sim_camera(), {}, nullptr);
   ASSERT_TRUE(e.ok) << e.reason;
   EXPECT_LT(angle_deg(e.R_i_j, R), 0.1);
   EXPECT_GT(e.t_i_j_unit.dot(t.normalized()), std::cos(1.0 * M_PI / 180.0));
@@ -80,8 +70,10 @@ TEST(Essential, RecoversPoseWithOutliersByLmeds) {
   EXPECT_GT(e.inliers.size(), 200u);
   for (int k : e.inliers) {
     const auto& m = s.matches.matches[static_cast<std::size_t>(k)];
-    const Eigen::Vector2d xi = normalised_from_pixel(camera(), s.i.points_px[static_cast<std::size_t>(m.index_i)]);
-    const Eigen::Vector2d xj = normalised_from_pixel(camera(), s.j.points_px[static_cast<std::size_t>(m.index_j)]);
+    const Eigen::Vector2d xi = normalised_from_pixel(
+        test::sim_camera(), s.i.points_px[static_cast<std::size_t>(m.index_i)]);
+    const Eigen::Vector2d xj = normalised_from_pixel(
+        test::sim_camera(), s.j.points_px[static_cast<std::size_t>(m.index_j)]);
     EXPECT_LT(std::abs(sampson_distance(e.E, xi, xj)) * 1000.0, 5.0);
   }
 }
@@ -93,7 +85,8 @@ TEST(Essential, RansacAndUsacAgreeWithLmeds) {
   for (RobustMethod method : {RobustMethod::kRansac, RobustMethod::kUsacMagsac}) {
     EssentialOptions options;
     options.method = method;
-    const EssentialEstimate e = estimate_essential(s.i, s.j, s.matches, camera(), options, nullptr);
+    const EssentialEstimate e =
+        estimate_essential(s.i, s.j, s.matches, test::sim_camera(), options, nullptr);
     ASSERT_TRUE(e.ok) << e.reason;
     EXPECT_LT(angle_deg(e.R_i_j, R), 0.1);
     EXPECT_GT(e.t_i_j_unit.dot(t.normalized()), std::cos(1.0 * M_PI / 180.0));
@@ -103,15 +96,17 @@ TEST(Essential, RansacAndUsacAgreeWithLmeds) {
 TEST(Essential, PureRotationFailsWithReason) {
   const Eigen::Matrix3d R = core::rotation_from_euler(Eigen::Vector3d(0.02, 0.01, 0.2));
   const Scene s = make_scene(R, Eigen::Vector3d::Zero(), 3.0, 0.3, 0.1, 0.0, 200, 3);
-  const EssentialEstimate e = estimate_essential(s.i, s.j, s.matches, camera(), {}, nullptr);
+  const EssentialEstimate e =
+      estimate_essential(s.i, s.j, s.matches, test::sim_camera(), {}, nullptr);
   EXPECT_FALSE(e.ok);
   EXPECT_NE(e.reason.find("parallax"), std::string::npos) << e.reason;
 }
 
 TEST(Essential, TooFewMatchesFailsWithReason) {
-  const Scene s = make_scene(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.5, 0, 0), 3.0, 0.3,
-                             0.5, 0.0, 4, 4);
-  const EssentialEstimate e = estimate_essential(s.i, s.j, s.matches, camera(), {}, nullptr);
+  const Scene s =
+      make_scene(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.5, 0, 0), 3.0, 0.3, 0.5, 0.0, 4, 4);
+  const EssentialEstimate e =
+      estimate_essential(s.i, s.j, s.matches, test::sim_camera(), {}, nullptr);
   EXPECT_FALSE(e.ok);
   EXPECT_NE(e.reason.find("4 putative matches"), std::string::npos) << e.reason;
 }
@@ -126,7 +121,8 @@ TEST(Essential, PlanarSceneWithPriorPicksTheDecompositionNearestThePrior) {
   prior.covariance = Mat6::Identity() * 1e-3;
   prior.scene_depth_m = 3.0;
   prior.scene_depth_sigma_m = 0.5;
-  const EssentialEstimate e = estimate_essential(s.i, s.j, s.matches, camera(), {}, &prior);
+  const EssentialEstimate e =
+      estimate_essential(s.i, s.j, s.matches, test::sim_camera(), {}, &prior);
   ASSERT_TRUE(e.ok) << e.reason;
   EXPECT_LT(angle_deg(e.R_i_j, R), 0.2);
   EXPECT_GT(e.t_i_j_unit.dot(t.normalized()), std::cos(2.0 * M_PI / 180.0));
@@ -167,7 +163,8 @@ TEST(Essential, PlanarSceneFollowsThePriorToTheOtherPlanarSolution) {
     prior.scene_depth_sigma_m = 0.5;
     EssentialOptions options;
     options.ambiguity_ratio = 0.5;
-    const EssentialEstimate e = estimate_essential(s.i, s.j, s.matches, camera(), options, &prior);
+    const EssentialEstimate e =
+        estimate_essential(s.i, s.j, s.matches, test::sim_camera(), options, &prior);
     ASSERT_TRUE(e.ok) << e.reason;
     EXPECT_LT(angle_deg(e.R_i_j, Rk), angle_deg(e.R_i_j, R)) << "chose the truth, not the prior's";
     EXPECT_LT(angle_deg(e.R_i_j, Rk), 0.5);

@@ -3,33 +3,19 @@
 #include "nav/vision/preprocess.h"
 
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include <cmath>
 #include <cstdint>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
 #include "nav/testing/data.h"
+#include "test_cameras.h"
 
 namespace nav::vision {
 namespace {
-
-CameraIntrinsics sparus_camera() {
-  CameraIntrinsics c;
-  c.fx_px = 405.6384738851233;
-  c.fy_px = 405.588335378204;
-  c.cx_px = 189.9054317917407;
-  c.cy_px = 139.9149578253755;
-  c.k1 = -0.3670656233416921;
-  c.k2 = 0.203001968694465;
-  c.p1 = 0.003336917744124004;
-  c.p2 = -0.000487426354679637;
-  c.width_px = 384;
-  c.height_px = 288;
-  return c;
-}
 
 /// A strobe-like falloff: 1 at (0.3 w, 0.4 h), falling as a Gaussian to ~0.2 at the far corner.
 cv::Mat falloff(cv::Size size) {
@@ -70,14 +56,16 @@ TEST(Preprocess, RealFrameBecomesFlatterAndMoreContrasted) {
   const cv::Mat raw = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
   ASSERT_FALSE(raw.empty());
   cv::Mat out;
-  const Preprocessor pre(sparus_camera(), PreprocessOptions{});
+  const Preprocessor pre(test::sparus_camera(), PreprocessOptions{});
   ASSERT_TRUE(pre.run(raw, &out).ok());
   EXPECT_EQ(out.type(), CV_8UC1);
   EXPECT_EQ(out.size(), raw.size());
   cv::Mat grey;
   cv::cvtColor(raw, grey, cv::COLOR_BGR2GRAY);
-  const double flat_before = illumination_flatness(grey, 4), flat_after = illumination_flatness(out, 4);
-  const double contrast_before = mean_local_contrast(grey), contrast_after = mean_local_contrast(out);
+  const double flat_before = illumination_flatness(grey, 4),
+               flat_after = illumination_flatness(out, 4);
+  const double contrast_before = mean_local_contrast(grey),
+               contrast_after = mean_local_contrast(out);
   std::printf("Sparus frame_01: flatness %.3f -> %.3f, local contrast %.3f -> %.3f\n", flat_before,
               flat_after, contrast_before, contrast_after);
   EXPECT_LT(flat_after, 0.6 * flat_before);
@@ -100,7 +88,7 @@ TEST(Preprocess, TwelveBitStrobeFalloffIsRemovedByLowPassAndByRunningMean) {
   const double raw_flatness = illumination_flatness(unit8, 4);
   for (auto mode : {IlluminationCompensation::kLowPass, IlluminationCompensation::kRunningMean}) {
     options.illumination = mode;
-    const Preprocessor pre(sparus_camera(), options);
+    const Preprocessor pre(test::sparus_camera(), options);
     cv::Mat out;
     const core::Status s = pre.run(frames12[5], &out, &mean);
     ASSERT_TRUE(s.ok()) << s.message();
@@ -113,12 +101,12 @@ TEST(Preprocess, TwelveBitStrobeFalloffIsRemovedByLowPassAndByRunningMean) {
   options.illumination = IlluminationCompensation::kNone;
   options.clahe_clip_limit = 0.0;
   cv::Mat out;
-  ASSERT_TRUE(Preprocessor(sparus_camera(), options).run(frames12[5], &out).ok());
+  ASSERT_TRUE(Preprocessor(test::sparus_camera(), options).run(frames12[5], &out).ok());
   EXPECT_GT(illumination_flatness(out, 4), 0.5 * raw_flatness);
 }
 
 TEST(Preprocess, BadInputIsRejectedWithAClearMessage) {
-  const CameraIntrinsics camera = sparus_camera();
+  const CameraIntrinsics camera = test::sparus_camera();
   const Preprocessor pre(camera, PreprocessOptions{});
   cv::Mat out;
   auto message = [&](const cv::Mat& raw) {
@@ -140,7 +128,8 @@ TEST(Preprocess, BadInputIsRejectedWithAClearMessage) {
   // Truncated raw buffer.
   std::vector<std::uint8_t> buffer(384 * 288 * 2 - 10);
   cv::Mat frame;
-  const core::Status truncated = frame_from_buffer(buffer.data(), buffer.size(), 384, 288, 2, &frame);
+  const core::Status truncated =
+      frame_from_buffer(buffer.data(), buffer.size(), 384, 288, 2, &frame);
   EXPECT_FALSE(truncated.ok());
   EXPECT_NE(truncated.message().find("truncated"), std::string::npos) << truncated.message();
   buffer.resize(384 * 288 * 2);
@@ -163,7 +152,8 @@ TEST(Preprocess, BadInputIsRejectedWithAClearMessage) {
   // Missing calibration: undistortion needs the intrinsics.
   CameraIntrinsics missing = camera;
   missing.fx_px = 0.0;
-  const core::Status no_calibration = Preprocessor(missing, PreprocessOptions{}).run(ok_frame, &out);
+  const core::Status no_calibration =
+      Preprocessor(missing, PreprocessOptions{}).run(ok_frame, &out);
   EXPECT_FALSE(no_calibration.ok());
   EXPECT_NE(no_calibration.message().find("missing calibration"), std::string::npos);
 }

@@ -3,13 +3,13 @@
 // pairs), relative rotation against the interpolated logged camera attitude, with the robust
 // estimator LMedS (the paper's) measured against RANSAC and USAC (MAGSAC++).
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <opencv2/imgcodecs.hpp>
 #include <utility>
 #include <vector>
 
@@ -17,24 +17,10 @@
 #include "nav/testing/data.h"
 #include "nav/vision/registration.h"
 #include "sparus_truth.h"
+#include "test_cameras.h"
 
 namespace nav::vision {
 namespace {
-
-CameraIntrinsics sparus_camera() {
-  CameraIntrinsics c;
-  c.fx_px = 405.6384738851233;
-  c.fy_px = 405.588335378204;
-  c.cx_px = 189.9054317917407;
-  c.cy_px = 139.9149578253755;
-  c.k1 = -0.3670656233416921;
-  c.k2 = 0.203001968694465;
-  c.p1 = 0.003336917744124004;
-  c.p2 = -0.000487426354679637;
-  c.width_px = 384;
-  c.height_px = 288;
-  return c;
-}
 
 constexpr double kDeg = 180.0 / std::numbers::pi;
 
@@ -91,7 +77,7 @@ TEST(SparusRegistration, MedianRotationErrorOfPairs1_3_6ApartAndRobustEstimators
   const auto truth = testing::load_sparus_truth(frames_csv.parent_path().string());
   ASSERT_EQ(truth.frame_files.size(), 22u);
   ASSERT_GE(truth.knot_times_s.size(), 10u);
-  const Registration lmeds(sparus_camera());
+  const Registration lmeds(test::sparus_camera());
   std::vector<ImageFeatures> features;
   const auto t0 = std::chrono::steady_clock::now();
   for (const auto& file : truth.frame_files) {
@@ -99,15 +85,17 @@ TEST(SparusRegistration, MedianRotationErrorOfPairs1_3_6ApartAndRobustEstimators
         cv::imread((frames_csv.parent_path() / file).string(), cv::IMREAD_UNCHANGED);
     features.push_back(lmeds.features(image));
   }
-  std::printf("features: %.1f ms per 384x288 frame\n",
-              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() /
-                  static_cast<double>(features.size()));
+  std::printf(
+      "features: %.1f ms per 384x288 frame\n",
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() /
+          static_cast<double>(features.size()));
 
   const Evaluation e = evaluate(lmeds, features, truth, true);
   ASSERT_EQ(e.errors_deg.size(), 31u);
-  std::printf("LMedS: %d/31 registered, median rotation error %.3f deg, median inliers %.0f, "
-              "%.1f ms per pair\n",
-              e.successes, median(e.errors_deg), median(e.inliers), e.pair_ms);
+  std::printf(
+      "LMedS: %d/31 registered, median rotation error %.3f deg, median inliers %.0f, "
+      "%.1f ms per pair\n",
+      e.successes, median(e.errors_deg), median(e.inliers), e.pair_ms);
   RecordProperty("lmeds_median_rotation_error_deg", std::to_string(median(e.errors_deg)));
   EXPECT_GE(e.successes, 29);
   EXPECT_LE(median(e.errors_deg), 0.75);
@@ -115,11 +103,13 @@ TEST(SparusRegistration, MedianRotationErrorOfPairs1_3_6ApartAndRobustEstimators
   for (RobustMethod method : {RobustMethod::kRansac, RobustMethod::kUsacMagsac}) {
     RegistrationOptions options;
     options.essential.method = method;
-    const Evaluation other = evaluate(Registration(sparus_camera(), options), features, truth, false);
-    std::printf("%s: %d/31 registered, median rotation error %.3f deg, median inliers %.0f, "
-                "%.1f ms per pair\n",
-                method == RobustMethod::kRansac ? "RANSAC" : "USAC-MAGSAC", other.successes,
-                median(other.errors_deg), median(other.inliers), other.pair_ms);
+    const Evaluation other =
+        evaluate(Registration(test::sparus_camera(), options), features, truth, false);
+    std::printf(
+        "%s: %d/31 registered, median rotation error %.3f deg, median inliers %.0f, "
+        "%.1f ms per pair\n",
+        method == RobustMethod::kRansac ? "RANSAC" : "USAC-MAGSAC", other.successes,
+        median(other.errors_deg), median(other.inliers), other.pair_ms);
     // The comparison is reported; each estimator must still register the overlapping pairs.
     EXPECT_GE(other.successes, 27);
   }

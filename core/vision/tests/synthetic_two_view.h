@@ -12,20 +12,11 @@
 
 #include "nav/core/geometry/pose.h"
 #include "nav/vision/types.h"
+#include "test_cameras.h"
 
 namespace nav::vision::test {
 
 inline double deg(double d) { return d * std::numbers::pi / 180.0; }
-
-inline CameraIntrinsics sim_camera() {
-  CameraIntrinsics c;
-  c.fx_px = c.fy_px = 1000.0;
-  c.cx_px = 640.0;
-  c.cy_px = 512.0;
-  c.width_px = 1280;
-  c.height_px = 1024;
-  return c;
-}
 
 /// Camera j in camera i: 0.7 m lateral, small tilt, 8 deg yaw (a survey leg neighbour).
 inline Vec6 default_x_i_j() {

@@ -19,9 +19,10 @@
 #include <string>
 
 #include "nav/daemon/config/config.h"
-#include "nav/daemon/system/sd_notify.h"
 #include "nav/daemon/service/live_mode.h"
 #include "nav/daemon/service/replay_mode.h"
+#include "nav/daemon/system/sd_notify.h"
+#include "nav/daemon/system/stop_signals.h"
 
 namespace {
 
@@ -55,16 +56,6 @@ void add_options(CLI::App& app, Args& args) {
   app.add_option("--duration-s", args.duration_s,
                  "live mode: stop after this many seconds (0: no limit)")
       ->check(CLI::NonNegativeNumber);
-}
-
-/// Blocks SIGTERM/SIGINT in every thread (threads inherit the mask); the modes wait for them.
-sigset_t block_stop_signals() {
-  sigset_t set;
-  sigemptyset(&set);
-  sigaddset(&set, SIGTERM);
-  sigaddset(&set, SIGINT);
-  pthread_sigmask(SIG_BLOCK, &set, nullptr);
-  return set;
 }
 
 int run(const Args& args, const sigset_t& signals) {
@@ -103,7 +94,7 @@ int run(const Args& args, const sigset_t& signals) {
 int main(int argc, char** argv) {
   // First of all, so that a SIGTERM during start-up (config, resume) is held
   // pending for the mode's wait instead of killing the process with its default action.
-  const sigset_t signals = block_stop_signals();
+  const sigset_t signals = daemon::block_stop_signals();
   spdlog::set_default_logger(spdlog::stderr_color_mt("navd"));
   CLI::App app{"navd: navigation daemon (view-based SLAM information filter, ESDF)"};
   Args args;

@@ -22,12 +22,13 @@
 #include <string>
 
 #include "nav/daemon/config/config.h"
-#include "nav/daemon/system/sd_notify.h"
 #include "nav/daemon/service/lcm_url.h"
 #include "nav/daemon/service/replay_mode.h"
+#include "nav/daemon/system/sd_notify.h"
+#include "nav/daemon/system/stop_signals.h"
+#include "nav/report/report.h"
 #include "navtool/commands.h"
 #include "navtool/survey/sim_dive.h"
-#include "nav/report/report.h"
 
 namespace nav::tool {
 namespace {
@@ -42,17 +43,6 @@ struct SurveyArgs {
   bool checkpoints = false;
   std::string lcm_url;  ///< overrides lcm.url; no memq fallback when given
 };
-
-/// Blocks SIGTERM/SIGINT in this thread and every thread started after it; the simulation and
-/// the replay mode wait for them with sigtimedwait.
-sigset_t block_stop_signals() {
-  sigset_t set;
-  sigemptyset(&set);
-  sigaddset(&set, SIGTERM);
-  sigaddset(&set, SIGINT);
-  pthread_sigmask(SIG_BLOCK, &set, nullptr);
-  return set;
-}
 
 /// The report of the replay output directory `out_dir` of the dive `dive_dir`.
 void write_report(const std::string& out_dir, const std::string& dive_dir) {
@@ -75,7 +65,7 @@ void write_report(const std::string& out_dir, const std::string& dive_dir) {
 }
 
 void run_survey(const SurveyArgs& args) {
-  const sigset_t signals = block_stop_signals();
+  const sigset_t signals = daemon::block_stop_signals();
   spdlog::set_default_logger(spdlog::stderr_color_mt("navtool-survey"));
   daemon::NavdConfig config;
   daemon::SimDiveConfig sim;
@@ -120,6 +110,11 @@ void run_survey(const SurveyArgs& args) {
                                                .out_dir = args.out_dir,
                                                .checkpoints = args.checkpoints,
                                                .checkpoint_identity = sim_dive_identity(sim)};
+  spdlog::info(
+      "navtool survey: live view: `navtool topside --config {}` in another terminal, then open "
+      "http://127.0.0.1:8765/ (or Foxglove Studio on ws://127.0.0.1:8765); pace the replay with "
+      "--speed 20 to watch it",
+      args.config_path);
   if (args.checkpoints) {
     spdlog::info("navtool survey: checkpoints in {} (input '{}')", config.checkpoint.path,
                  replay.checkpoint_identity);

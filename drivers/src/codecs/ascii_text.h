@@ -23,19 +23,14 @@ namespace nav::drivers::ascii {
 /// Strict decimal number: optional sign, digits, optional '.' and digits, at least one digit.
 /// No exponent, no "nan"/"inf", no spaces. Empty optional when the text is anything else.
 std::optional<double> parse_decimal(std::string_view text);
-
 /// 1..8 hexadecimal digits (either case) -> value.
 std::optional<uint32_t> parse_hex32(std::string_view text);
-
 /// Removes leading and trailing spaces and tabs.
 std::string_view trim(std::string_view text);
-
 /// Fixed-point text of `value` with `decimals` digits after the point (locale-free).
 std::string format_fixed(double value, int decimals);
-
 /// Two upper-case hexadecimal digits of `byte`.
 std::string hex2(uint8_t byte);
-
 /// Comma-separated fields of a sentence body, at most kMaxFields (more -> `overflow`).
 struct Fields {
   static constexpr std::size_t kMaxFields = 32;
@@ -46,16 +41,13 @@ struct Fields {
   std::string_view operator[](std::size_t i) const { return i < count ? field[i] : ""; }
 };
 Fields split_fields(std::string_view text, char separator = ',');
-
 /// NMEA 0183 checksum: XOR of every character between '$' (or '!') and '*', exclusive.
 uint8_t nmea_checksum(std::string_view body);
 
 enum class SentenceCheck { kOk, kBadChecksum, kMalformed, kMissingChecksum };
-
 /// Validates one framed NMEA sentence `$<body>[*hh]` (without its line terminator) and returns
 /// the body between the start character and '*' in `body`.
 SentenceCheck check_nmea_sentence(std::string_view sentence, std::string_view& body);
-
 /// check_nmea_sentence with the counting of the NMEA codecs: a bad checksum counts in
 /// `stats.checksum_failures`; a malformed sentence, or one without checksum when
 /// `require_checksum`, counts in `stats.malformed`. Returns whether `body` may be parsed.
