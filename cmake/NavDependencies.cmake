@@ -3,7 +3,7 @@ find_package(Eigen3 3.4 REQUIRED NO_MODULE)
 find_package(Threads REQUIRED)
 find_package(PkgConfig REQUIRED)
 
-# SuiteSparse 5.12 ships neither a CMake config nor a .pc file (PLATFORM.md).
+# SuiteSparse 5.12 ships neither a CMake config nor a .pc file (docs/platform.md).
 find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse REQUIRED)
 find_library(CHOLMOD_LIBRARY cholmod REQUIRED)
 find_library(SUITESPARSE_CONFIG_LIBRARY suitesparseconfig REQUIRED)

@@ -1,18 +1,18 @@
-// "No allocation proportional to map size in predict/update" (ARCHITECTURE.md: no allocation
+// "No allocation proportional to map size in predict/update" (docs/architecture.md: no allocation
 // in the filter's hot path after start-up): after a warm-up, marginalising predicts, unary
 // updates and camera-link updates perform no heap allocation at all. Counted by interposing
 // malloc (glibc's __libc_malloc underneath), which also sees operator new and Eigen's
 // dynamic allocations. Skipped under AddressSanitizer, which owns malloc.
-#include "nav/core/filter/esdf.h"
-#include "nav/core/models/binary_models.h"
-#include "nav/core/models/constant_velocity.h"
-#include "nav/core/models/unary_models.h"
-
 #include <gtest/gtest.h>
 
 #include <atomic>
 #include <cstddef>
 #include <numbers>
+
+#include "nav/core/filter/esdf.h"
+#include "nav/core/models/binary_models.h"
+#include "nav/core/models/constant_velocity.h"
+#include "nav/core/models/unary_models.h"
 
 #if defined(__SANITIZE_ADDRESS__)
 #define NAV_ALLOC_COUNTING 0

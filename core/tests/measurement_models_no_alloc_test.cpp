@@ -1,5 +1,5 @@
-// The per-measurement path must not allocate (STYLE.md rule 6): predicting every model with
-// its Jacobian, SSC compounding and the process model are run with malloc instrumented.
+// The per-measurement path must not allocate (docs/architecture.md "Conventions"): predicting every
+// model with its Jacobian, SSC compounding and the process model are run with malloc instrumented.
 // malloc is interposed in this executable (glibc's __libc_malloc does the work); under
 // AddressSanitizer, which owns malloc itself, the test skips.
 

@@ -1,5 +1,5 @@
 // navd (live mode) stops on SIGTERM although its GigE camera vanished (killed -9) or hung
-// (SIGSTOP) (issue 5 §1): the real navd binary with a software-triggered camera on Aravis' fake
+// (SIGSTOP): the real navd binary with a software-triggered camera on Aravis' fake
 // GigE Vision camera, run by this test as a separate process (`arv-fake-gv-camera-0.8 -i
 // 127.0.0.1`) in the test's own network namespace (support/net_namespace.h), so it cannot meet
 // another test's fake on 127.0.0.1:3956. Once navd has written a frame the camera is killed or
@@ -38,7 +38,7 @@ using Clock = std::chrono::steady_clock;
 using namespace std::chrono_literals;
 
 constexpr const char* kFakeCamera = "arv-fake-gv-camera-0.8";
-/// The contract: SIGTERM to exit, wall time (issue 5 asks for 1 s; this allows for load).
+/// The contract: SIGTERM to exit, wall time (the contract is 1 s; this allows for load).
 constexpr auto kStopBound = 2s;
 // Before any thread: the fake camera and navd inherit the namespace.
 const nav::tool::test::NetNamespace& kNet = nav::tool::test::isolated_network();

@@ -1,4 +1,4 @@
-// navd checkpoints end to end (issue "navd" §6, §7): a simulated dive (navtool simulate) replayed
+// navd checkpoints end to end: a simulated dive (navtool simulate) replayed
 // by the real navd with --checkpoints at 100x real time is killed with SIGKILL at random points
 // and restarted each time; the last start finishes the dive. Its replay output (delayed states
 // with bounds, links, trajectory) must equal an uninterrupted run's, with every delayed state,
@@ -43,8 +43,7 @@ int wait_status(pid_t pid) {
 }
 
 /// Polls `file` until it contains `text` or `timeout` passes (then the caller's checks fail).
-void wait_for_text(const fs::path& file, const std::string& text,
-                   std::chrono::seconds timeout) {
+void wait_for_text(const fs::path& file, const std::string& text, std::chrono::seconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   while (std::chrono::steady_clock::now() < deadline) {
     if (fs::exists(file) && read_text(file).find(text) != std::string::npos) return;

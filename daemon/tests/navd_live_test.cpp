@@ -98,10 +98,14 @@ fs::path write_live_config(const fs::path& dir, const PtySensor& heading, const 
   const std::string sensors =
       "sensors:\n"
       "  - name: heading\n    type: heading_nmea\n"
-      "    transport: {type: serial, device: " + heading.name() + ", baud: 9600}\n"
+      "    transport: {type: serial, device: " +
+      heading.name() +
+      ", baud: 9600}\n"
       "    noise: {roll_pitch_deg: 0.1, heading_deg: 0.1}\n    latency_ms: 20\n"
       "  - name: depth\n    type: pressure_paro\n"
-      "    transport: {type: serial, device: " + depth.name() + ", baud: 9600}\n"
+      "    transport: {type: serial, device: " +
+      depth.name() +
+      ", baud: 9600}\n"
       "    noise: {depth_m: 0.01}\n    latency_ms: 50\n";
   text.replace(begin, end - begin, sensors);
   const fs::path path = dir / "live.yaml";
@@ -132,14 +136,18 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
       kNet.ok && lcm.good() && nav::tool::test::udpm_loops_back(lcm, "NAVD_LIVE_TEST_PROBE");
   Solutions got;
   if (udpm) lcm.subscribe("NAVD_SOLUTION", &Solutions::on, &got);
-  const pid_t pid = spawn_navd({"--config", config.string(), "--lcm-url", udpm ? kUdpmUrl : "memq://"}, dir);
+  const pid_t pid =
+      spawn_navd({"--config", config.string(), "--lcm-url", udpm ? kUdpmUrl : "memq://"}, dir);
   const auto until = Clock::now() + std::chrono::milliseconds(2500);
   // The vision stage's answers (NAV_REGISTRATION) reach the filter thread: one pair, its
   // duplicate, one invalid (frame_id_i = frame_id_j), 1.5 s in (navd subscribed long before).
   const auto answer_at = Clock::now() + std::chrono::milliseconds(1500);
   bool answered = false;
   while (Clock::now() < until) {
-    if (udpm) lcm.handleTimeout(20); else std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (udpm)
+      lcm.handleTimeout(20);
+    else
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
     if (udpm && !answered && Clock::now() >= answer_at) {
       navlcm::registration_t r{};
       r.frame_id_i = 1;
@@ -180,7 +188,7 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
   EXPECT_NEAR(got.last.rph_rad[2], kHeadingDeg * M_PI / 180.0, 0.01);
   EXPECT_NEAR(got.last.p_world_m[2], 10.0, 0.5);
   EXPECT_NEAR(got.last.p_world_m[0], 0.0, 0.5);  // no velocity sensor: it stays at the origin
-  // Issue 5 §2: the first solution (no image yet) carries the robot's marginal (Λ_rr⁻¹), not
+  // The first solution (no image yet) carries the robot's marginal (Λ_rr⁻¹), not
   // an identity placeholder: symmetric positive definite, heading and depth at the size of
   // the filter's prior (10 x the sensor sigmas) or tighter.
   const Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> P(got.first.pose_covariance);

@@ -1,4 +1,4 @@
-// navd's published pose covariance (issue 5 §2): from the first estimate on, the SolutionBoard
+// navd's published pose covariance: from the first estimate on, the SolutionBoard
 // that Publisher turns into nav_solution_t.pose_covariance carries the robot's marginal, not
 // the identity placeholder (a ±1 m / ±57° bound at dive start). Before the first delayed state
 // it must equal the exact marginal of the filter's Λ (CHOLMOD selected inversion,
@@ -14,12 +14,12 @@
 #include <cstdio>
 #include <string>
 
+#include "nav/core/navigation/nav_filter.h"
 #include "nav/core/recovery/exact_marginals.h"
 #include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/service/link_publisher.h"
 #include "nav/daemon/service/solution_board.h"
-#include "nav/core/navigation/nav_filter.h"
 #include "support/synthetic_dive.h"
 
 namespace nav::daemon::service {

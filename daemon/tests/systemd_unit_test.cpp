@@ -1,4 +1,4 @@
-// systemd/navd.service (issue "navd" §5): the directives a vehicle relies on (Type=notify,
+// systemd/navd.service: the directives a vehicle relies on (Type=notify,
 // WatchdogSec, Restart=on-failure, an unprivileged user, capabilities limited to what raw CAN
 // and real-time scheduling could need, hardening), ExecStart options navd really accepts,
 // `systemd-analyze verify` on a copy whose ExecStart is the built navd, and the exposure of

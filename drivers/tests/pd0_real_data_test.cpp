@@ -1,4 +1,4 @@
-// Tests of the RDI PD0 decoder on the real recordings in shared/data/dvl: values against the
+// Tests of the RDI PD0 decoder on the real recordings in data/dvl: values against the
 // *.expected.csv decoded by dolfyn (an independent decoder), byte accounting, re-encoding and
 // every-byte splits of real ensembles.
 #include <gtest/gtest.h>

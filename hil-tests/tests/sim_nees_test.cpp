@@ -1,4 +1,4 @@
-// Monte-Carlo consistency of the SLAM filter on the simulated survey (issue 6 §4): over
+// Monte-Carlo consistency of the SLAM filter on the simulated survey: over
 // kSeeds small dives, the newest delayed state's final mean (direct solve) against the true
 // pose of its image, normalised by its exact marginal (CHOLMOD + Takahashi, replay analyse()).
 // The seed-averaged 6-dof NEES must lie in the two-sided 95 % chi-square interval of
@@ -39,8 +39,7 @@ std::pair<double, double> mean_chi2_interval(int dof, int seeds, double confiden
   const int n = dof * seeds;
   const double lo_p = 0.5 * (1.0 - confidence), hi_p = 1.0 - lo_p;
   if (n <= 100)
-    return {core::chi_square_quantile(lo_p, n) / seeds,
-            core::chi_square_quantile(hi_p, n) / seeds};
+    return {core::chi_square_quantile(lo_p, n) / seeds, core::chi_square_quantile(hi_p, n) / seeds};
   const double z = 1.959963984540054;  // 97.5 % normal quantile (95 % two-sided)
   EXPECT_NEAR(confidence, 0.95, 1e-12) << "Wilson-Hilferty branch has z for 95 % only";
   const double c = 2.0 / (9.0 * n);

@@ -44,7 +44,7 @@ bool LinkProposer::propose(const Esdf& filter, const CovarianceBounds& bounds,
   return bounds.propose(block, recovery.cross_covariance(block), joint).ok();
 }
 
-/// The joint without the truncation inflation: [Σ^_rr Σ^_ri; Σ^_ir Σ~_ii] (nav_filter.h "Gate").
+/// The joint without the truncation inflation: [Σ^_rr Σ^_ri; Σ^_ir Σ~_ii] (link_gate.h).
 Eigen::MatrixXd LinkGate::gate_joint(const LinkProposal& p) {
   Eigen::MatrixXd joint = p.joint;
   joint.topLeftCorner(kD, kD).diagonal().array() -= p.epsilon_robot + p.epsilon_state;
@@ -53,7 +53,7 @@ Eigen::MatrixXd LinkGate::gate_joint(const LinkProposal& p) {
 }
 
 /// The 5-dof gate at the means x0 = [x_j; x_i] with the joint covariance: fills the link's
-/// innovation and Mahalanobis distance; true when it passes (nav_filter.h "Gate").
+/// innovation and Mahalanobis distance; true when it passes (link_gate.h).
 bool LinkGate::pass(const CameraRelativePoseModel& camera, const LinkPair& x0,
                     const Eigen::MatrixXd& joint_cov, const RegistrationResult& reg,
                     LinkRecord& link) const {
@@ -81,11 +81,10 @@ bool LinkGate::pass(const CameraRelativePoseModel& camera, const LinkPair& x0,
 }
 
 /// The accepted link's linearisation at the robot's iterated point (link_linearisation.h;
-/// nav_filter.h "Link update"), or at the means where the iteration fails.
+/// link_gate.h), or at the means where the iteration fails.
 LinkLinearisation LinkGate::linearise(const CameraRelativePoseModel& camera, const LinkPair& x0,
                                       const Eigen::MatrixXd& joint_cov,
-                                      const RegistrationResult& reg,
-                                      const LinkRecord& link) const {
+                                      const RegistrationResult& reg, const LinkRecord& link) const {
   LinkLinearisation lin;
   try {
     // Only the robot moves: J's robot block is the recovered Σ_rr, while state i's is its
@@ -115,9 +114,9 @@ LinkPair wrapped_difference(const LinkPair& a, const LinkPair& b) {
   return d;
 }
 
-LinkLinearisation iterated_link_point(const CameraRelativePoseModel& camera,
-                                      const LinkPair& x0, const Eigen::MatrixXd& joint,
-                                      const MeasVec& z, const MeasCov& R) {
+LinkLinearisation iterated_link_point(const CameraRelativePoseModel& camera, const LinkPair& x0,
+                                      const Eigen::MatrixXd& joint, const MeasVec& z,
+                                      const MeasCov& R) {
   constexpr int kMaxIterations = 10;
   constexpr double kConverged = 1e-9;  // step norm (m, rad)
   LinkLinearisation l;

@@ -12,11 +12,12 @@
 #include <thread>
 #include <vector>
 
-#include "nav/daemon/filter/filter_options.h"
-#include "nav/daemon/checkpoint/nav_filter_checkpointer.h"
-#include "nav/daemon/queue/measurement_queue.h"
-#include "nav/daemon/checkpoint/resume_point.h"
 #include "nav/core/navigation/nav_filter.h"
+#include "nav/daemon/checkpoint/nav_filter_checkpointer.h"
+#include "nav/daemon/checkpoint/resume_point.h"
+#include "nav/daemon/filter/filter_options.h"
+#include "nav/daemon/queue/measurement_queue.h"
+#include "nav/daemon/queue/time_ordering.h"
 #include "nav/daemon/service/lcm_url.h"
 #include "nav/daemon/service/link_publisher.h"
 #include "nav/daemon/service/navd_devices.h"
@@ -24,7 +25,6 @@
 #include "nav/daemon/service/registration_listener.h"
 #include "nav/daemon/service/solution_board.h"
 #include "nav/daemon/sources/device_sources.h"
-#include "nav/daemon/queue/time_ordering.h"
 
 namespace nav::daemon::service {
 namespace {
@@ -34,7 +34,7 @@ constexpr std::size_t kRegistrationCapacity = 1024;  ///< registrations queued f
 constexpr const char* kLiveIdentity = "live";
 /// How long a stop waits for the device threads after the filter thread has saved its final
 /// checkpoint; threads still inside a device call then are abandoned and the process ends
-/// (issue 5 §1: stopped within 1 s even when a GigE camera hung or vanished).
+/// (the stop contract: within 1 s even when a GigE camera hung or vanished).
 constexpr std::chrono::milliseconds kDeviceStopGrace{300};
 using Clock = std::chrono::steady_clock;
 
@@ -72,8 +72,8 @@ LiveFilter make_live_filter(const daemon::NavdConfig& config, bool checkpoints) 
     spdlog::info("navd: resumed from {} ({} measurements applied)", resumed.path.string(),
                  resumed.point.applied);
   }
-  live.checkpointer = std::make_unique<daemon::NavFilterCheckpointer>(
-      config.checkpoint, resumed.point, kLiveIdentity);
+  live.checkpointer = std::make_unique<daemon::NavFilterCheckpointer>(config.checkpoint,
+                                                                      resumed.point, kLiveIdentity);
   return live;
 }
 
@@ -81,8 +81,7 @@ LiveFilter make_live_filter(const daemon::NavdConfig& config, bool checkpoints) 
 std::string filter_one(LiveFilter& live, const daemon::Measurement& m, LinkPublisher& links) {
   if (live.skipper && live.skipper->skip(m)) return {};
   if (core::Status s = live.slam->process(m); !s.ok()) {
-    return "SLAM filter at t = " + std::to_string(daemon::validity_us(m)) +
-           " us: " + s.to_string();
+    return "SLAM filter at t = " + std::to_string(daemon::validity_us(m)) + " us: " + s.to_string();
   }
   if (live.checkpointer) live.checkpointer->after_measurement(*live.slam, m);
   links.on_measurement(*live.slam);

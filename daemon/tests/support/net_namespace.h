@@ -1,6 +1,6 @@
 #pragma once
-// An isolated network namespace per test process for tests that talk LCM udpm (issue 5 §7;
-// PLATFORM.md "LCM"): the process moves into a new network namespace whose only interface is
+// An isolated network namespace per test process for tests that talk LCM udpm
+// (docs/platform.md "LCM"): the process moves into a new network namespace whose only interface is
 // `lo`, brought up, with the multicast route 224.0.0.0/4 dev lo (what `unshare -rn sh -c 'ip
 // link set lo up && ip route add 224.0.0.0/4 dev lo'` does, here with ioctls so no tool is
 // needed). Child processes (navd) inherit it, so a test hears exactly its own navd, and tests

@@ -1,9 +1,8 @@
 #pragma once
 // Whether LCM udpm multicast with ttl=0 loops back to this process: the navd tests that
-// subscribe over real udpm skip with the reason when it does not (PLATFORM.md).
-#include <lcm/lcm-cpp.hpp>
-
+// subscribe over real udpm skip with the reason when it does not (docs/platform.md).
 #include <cstdint>
+#include <lcm/lcm-cpp.hpp>
 #include <string>
 
 namespace nav::tool::test {

@@ -1,4 +1,4 @@
-// Host receive time stamps (ARCHITECTURE.md "Time"): CLOCK_MONOTONIC and CLOCK_REALTIME read
+// Host receive time stamps (docs/architecture.md "Time"): CLOCK_MONOTONIC and CLOCK_REALTIME read
 // with clock_gettime(2) (POSIX.1-2017) right after a transport returns bytes.
 
 #include <ctime>

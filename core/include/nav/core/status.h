@@ -1,6 +1,7 @@
 #pragma once
-// Results instead of crashes (STYLE.md): every core operation that can reject its input
-// returns a Status naming what was wrong and where; the state is left unchanged on error.
+// Results instead of crashes (docs/architecture.md "Conventions"): every core operation that can
+// reject its input returns a Status naming what was wrong and where; the state is left unchanged on
+// error.
 
 #include <string>
 #include <utility>
@@ -9,11 +10,11 @@ namespace nav::core {
 
 enum class StatusCode {
   kOk = 0,
-  kInvalidArgument,   // NaN/Inf, wrong size, out-of-range value
+  kInvalidArgument,      // NaN/Inf, wrong size, out-of-range value
   kNotPositiveDefinite,  // a noise/information matrix that is not SPD
-  kUnknownState,      // a state id that is not (or no longer) in the filter
-  kNumericalFailure,  // factorisation failed, solver diverged
-  kOutOfRange,        // e.g. pitch at the Euler singularity
+  kUnknownState,         // a state id that is not (or no longer) in the filter
+  kNumericalFailure,     // factorisation failed, solver diverged
+  kOutOfRange,           // e.g. pitch at the Euler singularity
 };
 
 class [[nodiscard]] Status {

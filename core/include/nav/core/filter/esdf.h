@@ -15,20 +15,19 @@
 //
 // Errors: every fallible call returns a Status and leaves the filter bit-identical on error
 // (NaN/Inf, wrong sizes, non-SPD noise, unknown blocks, model singularities).
-// Not thread-safe: owned by the filter thread (ARCHITECTURE.md).
+// Not thread-safe: owned by the filter thread (docs/architecture.md).
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <exception>
+#include <stdexcept>
+#include <vector>
 
 #include "nav/core/filter/block_vector.h"
 #include "nav/core/filter/information_matrix.h"
 #include "nav/core/models/constant_velocity.h"
 #include "nav/core/models/measurement.h"
 #include "nav/core/status.h"
-
-#include <Eigen/Cholesky>
-#include <Eigen/Core>
-
-#include <exception>
-#include <stdexcept>
-#include <vector>
 
 namespace nav::core {
 
@@ -112,9 +111,8 @@ class Esdf {
 
  private:
   Status check_block(int block, const char* where) const;
-  Status check_measurement(const MeasVec& z, const MeasVec& h, const MeasJac* H1,
-                           const MeasJac* H2, const MeasCov& R, const char* where,
-                           Eigen::LLT<MeasCov>* llt) const;
+  Status check_measurement(const MeasVec& z, const MeasVec& h, const MeasJac* H1, const MeasJac* H2,
+                           const MeasCov& R, const char* where, Eigen::LLT<MeasCov>* llt) const;
   void begin_stats();
   void end_stats();
 

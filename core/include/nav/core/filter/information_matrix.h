@@ -11,11 +11,10 @@
 // std::deque, so appending a state never moves existing rows (no O(n) reallocation).
 // Blocks are fixed-capacity 12x12 Eigen matrices: no heap allocation per block.
 //
-// Not thread-safe; the filter thread is the only writer (ARCHITECTURE.md).
+// Not thread-safe; the filter thread is the only writer (docs/architecture.md).
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
-
 #include <cstddef>
 #include <cstdint>
 #include <deque>

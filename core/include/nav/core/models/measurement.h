@@ -1,7 +1,7 @@
 #pragma once
-// Common types of the measurement models (core/README.md; STYLE.md "one small type per
-// sensor"). Fixed-capacity Eigen storage (at most 6 rows, 12 columns) so predicting a
-// measurement and its Jacobian never allocates in the real-time path.
+// Common types of the measurement models (core/README.md; docs/architecture.md "Conventions" "one
+// small type per sensor"). Fixed-capacity Eigen storage (at most 6 rows, 12 columns) so predicting
+// a measurement and its Jacobian never allocates in the real-time path.
 //
 // Every model exposes:
 //   int  dim() const;            number of measurement rows (<= kMaxMeasDim)

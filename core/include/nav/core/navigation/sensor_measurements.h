@@ -1,7 +1,7 @@
 #pragma once
 // The measurements NavFilter consumes: small owned value types (no heap memory, trivially
 // copyable) in one std::variant, each carrying the sensor's time of validity and the host
-// receive times (ARCHITECTURE.md "Time"). Frames and units as in core/README.md: sensor-frame
+// receive times (docs/architecture.md "Time"). Frames and units as in core/README.md: sensor-frame
 // quantities are rotated into the body by the filter with the sensor's mount
 // (NavFilterOptions::sensors, indexed by MeasurementTime::sensor_index).
 

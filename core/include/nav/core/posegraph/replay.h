@@ -3,7 +3,7 @@
 // with state recovery (recovery/state_recovery.h) and the covariance bounds of Algorithm 1
 // (recovery/bounds.h) at every step, and checks the bounds against exact marginals at the end.
 //
-// Mapping (shared/data/README.md): vertices in index order; vertex 0 initialises the filter
+// Mapping (data/README.md): vertices in index order; vertex 0 initialises the filter
 // (Esdf, block 6) with the prior covariance `prior_covariance` (the same gauge prior as
 // AssemblyOptions, so the final Λ equals assemble_information() when the chain is unbroken).
 // Vertex k >= 1 is the new robot state:
@@ -29,7 +29,6 @@
 // recover(), update_bounds(), apply_links(); step() runs all four.
 
 #include <Eigen/Core>
-
 #include <memory>
 #include <vector>
 
@@ -133,12 +132,12 @@ class PoseGraphReplay {
 
 /// Bounds against exact marginals at the end of a replay (paper Fig. 3).
 struct BoundsCheck {
-  int checked = 0;                 ///< delayed states + the robot
-  int conservative = 0;            ///< bound - exact PSD within tolerance
-  double worst_min_eigenvalue = 0; ///< smallest eigenvalue of bound - exact over all states
-  std::vector<double> logdet_ratio_ours;           ///< per delayed state
-  std::vector<double> logdet_ratio_markov_blanket; ///< per delayed state
-  int markov_blanket_overconfident = 0;            ///< MB - exact not PSD
+  int checked = 0;                        ///< delayed states + the robot
+  int conservative = 0;                   ///< bound - exact PSD within tolerance
+  double worst_min_eigenvalue = 0;        ///< smallest eigenvalue of bound - exact over all states
+  std::vector<double> logdet_ratio_ours;  ///< per delayed state
+  std::vector<double> logdet_ratio_markov_blanket;  ///< per delayed state
+  int markov_blanket_overconfident = 0;             ///< MB - exact not PSD
   int not_positive_definite_bounds = 0;  ///< bounds that are not SPD (no log det; uncertified)
 };
 

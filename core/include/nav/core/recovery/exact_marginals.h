@@ -1,6 +1,6 @@
 #pragma once
 // Exact marginal covariances of a sparse SPD information matrix without a dense inverse:
-// the ground truth that covariance bounds are checked against (ARCHITECTURE.md "Core math").
+// the ground truth that covariance bounds are checked against (docs/architecture.md "Core math").
 //
 // Method: CHOLMOD supernodal Cholesky P Lambda P^T = L L^T with a fill-reducing ordering,
 // then selected inversion by the Takahashi recurrences (Takahashi, Fagan & Chen 1973;

@@ -1,9 +1,9 @@
 #pragma once
-// One numerical-differentiation helper for every analytic Jacobian in navd (STYLE.md, as
-// gtsam/base/numericalDerivative.h). Central differences, O(h^2) truncation error.
+// One numerical-differentiation helper for every analytic Jacobian in navd (docs/architecture.md
+// "Conventions", as gtsam/base/numericalDerivative.h). Central differences, O(h^2) truncation
+// error.
 
 #include <Eigen/Core>
-
 #include <functional>
 
 namespace nav::testing {

@@ -2,8 +2,8 @@
 // navd configuration (YAML, yaml-cpp): the typed NavdConfig and its loader. Every key is
 // documented in config/README.md; config/sim.yaml and config/rov.yaml are complete examples.
 //
-// Start-up contract (ARCHITECTURE.md): unknown keys, wrong types, out-of-range values and missing
-// required keys stop start-up with a ConfigError naming the key path and the reason, e.g.
+// Start-up contract (docs/architecture.md): unknown keys, wrong types, out-of-range values and
+// missing required keys stop start-up with a ConfigError naming the key path and the reason, e.g.
 //   "rov.yaml: sensors[2].transport.baud: 12345 is not a standard baud rate (1200 ... 921600)".
 // Units at this edge: angles in degrees (keys end in _deg), everything stored in SI / radians.
 // Noise defaults are Table II of Eustice et al., "Visually Navigating the RMS Titanic with SLAM
@@ -98,7 +98,7 @@ struct CameraConfig {
 
 /// Pressure-to-depth conversion (UNESCO 1983, drivers/codecs/seawater.h), pressure_paro only.
 struct PressureConfig {
-  double latitude_deg = 41.73;           ///< latitude_deg, [-90, 90] (default: RMS Titanic site)
+  double latitude_deg = 41.73;             ///< latitude_deg, [-90, 90] (default: RMS Titanic site)
   double surface_pressure_dbar = 10.1325;  ///< surface_pressure_dbar, atmosphere at the surface
 };
 
@@ -108,7 +108,7 @@ struct SensorConfig {
   Transport transport = SimTransport{};
   Mount mount;
   NoiseSigmas noise;
-  CameraConfig camera;  ///< required block for camera_* types, forbidden otherwise
+  CameraConfig camera;      ///< required block for camera_* types, forbidden otherwise
   PressureConfig pressure;  ///< pressure_paro only
   /// latency_ms: time from validity to the host reading the last byte, subtracted from the
   /// host receive time for sensors whose messages carry no usable device time. [0, 10000]
@@ -125,11 +125,11 @@ struct FilterConfig {
   /// README "Recovery thread").
   bool recovery_thread = false;
   /// Data time from an image to the measurement at which the filter takes the recovery
-  /// thread's result, s, [0, 3600] (nav_filter.h "Recovery thread"; the next image takes it
-  /// earlier: 10 s is past sim.yaml's 8 s image period, so replays overlap a whole period).
+  /// thread's result, s, [0, 3600] (nav/core/navigation/recovery_executor.h; the next image takes
+  /// it earlier: 10 s is past sim.yaml's 8 s image period, so replays overlap a whole period).
   double recovery_handoff_s = 10.0;
   /// How long a proposed pair waits for an asynchronous registration after its image's
-  /// receive time, s, [0, 3600] (nav_filter.h "Asynchronous registrations"); 0: the
+  /// receive time, s, [0, 3600] (nav/core/navigation/pending_registrations.h); 0: the
   /// registration table is complete when the image is processed (replay of a dive log).
   /// The live mode needs > 0 (its vision stage answers after the image).
   double registration_wait_s = 0.0;
@@ -146,8 +146,8 @@ struct LcmConfig {
   LcmChannel health{"NAVD_HEALTH", 1.0};
   LcmChannel bounds{"NAVD_BOUNDS", 0.2};  ///< delayed_state_bound_t at each insert/tightening
   LcmChannel bounds_snapshot{"NAVD_BOUNDS_SNAPSHOT", 0.2};  ///< bounds_snapshot_t at rate_hz
-  LcmChannel camera_links{"NAVD_CAMERA_LINKS", 1.0};  ///< camera_link_t per proposed pair
-                                                       ///< (event-driven; rate_hz unused)
+  LcmChannel camera_links{"NAVD_CAMERA_LINKS", 1.0};        ///< camera_link_t per proposed pair
+                                                            ///< (event-driven; rate_hz unused)
   /// registration_t navd's live mode subscribes to (the vision stage's answers; rate unused).
   LcmChannel registration{"NAV_REGISTRATION", 1.0};
   /// link_proposal_t per pair waiting for its registration (event-driven; rate unused).
@@ -164,10 +164,10 @@ struct CheckpointConfig {
 /// nav::sim::simulate_dive when it is missing and replays it. Paths relative to the working
 /// directory.
 struct SimDiveConfig {
-  std::string dive_dir;       ///< required in the section
-  int seed = 1;               ///< [0, 2^31 - 1]
-  int images = 866;           ///< [2, 100000]
-  double outlier_rate = 0.05; ///< [0, 1], fraction of registrations that are outliers
+  std::string dive_dir;        ///< required in the section
+  int seed = 1;                ///< [0, 2^31 - 1]
+  int images = 866;            ///< [2, 100000]
+  double outlier_rate = 0.05;  ///< [0, 1], fraction of registrations that are outliers
 };
 
 struct NavdConfig {
@@ -175,7 +175,7 @@ struct NavdConfig {
   FilterConfig filter;
   LcmConfig lcm;
   CheckpointConfig checkpoint;
-  std::optional<SimDiveConfig> sim;   ///< the `sim` section, if present
+  std::optional<SimDiveConfig> sim;  ///< the `sim` section, if present
 };
 
 /// Parses YAML text; `source` names it in errors; relative file names in it (CAN signal tables)

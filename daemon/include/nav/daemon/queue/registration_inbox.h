@@ -12,7 +12,7 @@
 //   A pair already in the table keeps its first answer (counted `duplicates`); frame_id_i >=
 //   frame_id_j is counted `invalid` and logged (never thrown into the filter thread).
 // * A registration for a pair the filter never proposes just stays in the table (`unknown` to
-//   the filter: nav_filter.h "Asynchronous registrations").
+//   the filter: nav/core/navigation/pending_registrations.h).
 
 #include <atomic>
 #include <cstddef>

@@ -5,7 +5,7 @@
 // bounds_snapshot_t of every state at lcm.channels.bounds_snapshot.rate_hz, and the
 // SolutionBoard view that Publisher turns into nav_solution_t / health_t. The view's pose
 // covariance is the robot's marginal from the first estimate on: Λ_rr⁻¹ before the first
-// delayed state (issue 5 §2: no identity placeholder at dive start), then the Σ_rr recovered
+// delayed state (no identity placeholder at dive start), then the Σ_rr recovered
 // at the last image.
 // Called on the filter thread after each measurement; work is O(1) except for new events and
 // the periodic snapshot (O(map)).
@@ -15,10 +15,10 @@
 #include <optional>
 #include <vector>
 
+#include "nav/core/navigation/nav_filter.h"
 #include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/service/solution_board.h"
-#include "nav/core/navigation/nav_filter.h"
 
 namespace lcm {
 class LCM;

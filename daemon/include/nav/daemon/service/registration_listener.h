@@ -1,5 +1,5 @@
 #pragma once
-// Live mode's link to an asynchronous vision stage (issue 5 §1; README "Live mode"):
+// Live mode's link to an asynchronous vision stage (docs/architecture.md):
 // * RegistrationListener: a thread with its own LCM instance (lcm.url) subscribed to
 //   lcm.channels.registration (default NAV_REGISTRATION); every registration_t it decodes goes
 //   into the RegistrationInbox (bounded SPSC queue, drops counted) that the filter thread
@@ -16,10 +16,10 @@
 #include <string>
 #include <thread>
 
+#include "nav/core/navigation/nav_filter.h"
 #include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/queue/registration_inbox.h"
-#include "nav/core/navigation/nav_filter.h"
 
 namespace lcm {
 class LCM;

@@ -1,8 +1,8 @@
 #pragma once
-// Device sources: the driver thread of one serial or CAN sensor on the vehicle (ARCHITECTURE.md
-// "Data flow"). Each loop reads its transport, publishes every read as navlcm::raw_bytes_t on
-// RAW_<NAME> (so `lcm-logger` records a dive that dive_log_source.h replays identically),
-// decodes it with the sensor's SensorDecoder and pushes the measurements into the
+// Device sources: the driver thread of one serial or CAN sensor on the vehicle
+// (docs/architecture.md "Data flow"). Each loop reads its transport, publishes every read as
+// navlcm::raw_bytes_t on RAW_<NAME> (so `lcm-logger` records a dive that dive_log_source.h replays
+// identically), decodes it with the sensor's SensorDecoder and pushes the measurements into the
 // MeasurementQueue (a full queue drops and counts: a live driver never waits for the filter).
 // Health (bytes, records, decode errors, queue drops, reconnects, last record time) goes to the
 // sensor's SensorHealth entry.

@@ -1,5 +1,5 @@
 #pragma once
-// Process CPU and memory for navd's health_t (issue 5: "health (... CPU, memory)"), read from
+// Process CPU and memory for navd's health_t, read from
 // procfs (proc(5)): utime + stime of /proc/<pid>/stat (fields 14 and 15, clock ticks) and
 // VmRSS / VmHWM of /proc/<pid>/status (kB). CPU % is the process CPU time over the wall interval
 // between two samples, 100 = one core fully busy (2 busy threads: 200); resolution one clock tick

@@ -1,5 +1,5 @@
 #pragma once
-// Time stamps carried by every decoded value (ARCHITECTURE.md "Time"): the sensor's own time
+// Time stamps carried by every decoded value (docs/architecture.md "Time"): the sensor's own time
 // of validity when its protocol has one, and the host receive times, all in microseconds.
 
 #include <cstdint>
@@ -13,7 +13,7 @@ struct HostTime {
 };
 
 struct Timestamps {
-  HostTime host;                        ///< when the host received the record
+  HostTime host;                          ///< when the host received the record
   std::optional<int64_t> sensor_time_us;  ///< sensor's time of validity, its own clock/epoch
 };
 

@@ -1,5 +1,5 @@
 #pragma once
-// Errors as values for every device transport (STYLE.md "Results, not crashes"): what failed,
+// Errors as values for every device transport (docs/architecture.md "Conventions"): what failed,
 // on which device, and the errno text when the kernel reported one. Transports never throw.
 
 #include <string>
