@@ -14,7 +14,7 @@
 
 #include "nav/vision/relative_pose_5dof.h"
 #include "nav/vision/two_view_refinement.h"
-#include "nav/vision/types.h"
+#include "nav/vision/vision_types.h"
 
 namespace nav::vision::two_view {
 

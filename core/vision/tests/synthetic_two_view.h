@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "nav/core/geometry/pose.h"
-#include "nav/vision/types.h"
+#include "nav/vision/vision_types.h"
 #include "test_cameras.h"
 
 namespace nav::vision::test {

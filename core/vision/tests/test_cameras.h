@@ -2,7 +2,7 @@
 // The cameras of the vision tests and benchmarks: the survey simulator's 1280x1024 camera
 // (config/sim.yaml: fx = fy = 1000 px, principal point at the centre, no distortion) and the
 // calibrated Sparus II camera of data/images/sparus (data/README.md, OpenCV model, pixels).
-#include "nav/vision/types.h"
+#include "nav/vision/vision_types.h"
 
 namespace nav::vision::test {
 

@@ -1,7 +1,7 @@
 // navtool survey [--config config/sim.yaml] [--as-fast-as-possible | --speed X] [--out DIR]
 //                [--images N] [--seed S] [--checkpoints] [--lcm-url URL]
 // The simulated survey end to end: the dive of the config's `sim` section is simulated into
-// sim.dive_dir when missing or simulated with other options (survey/sim_dive.h), replayed
+// sim.dive_dir when missing or simulated with other options (survey/survey_dive.h), replayed
 // through navd's replay mode (nav/daemon/service/replay_mode.h: the same source, time ordering,
 // NavFilter and LCM publishers as `navd --replay`), and with --out the replay output directory
 // and the report (metrics.json, the paper's figures; report/report.h) are written there. The
@@ -28,7 +28,7 @@
 #include "nav/daemon/system/stop_signals.h"
 #include "nav/report/report.h"
 #include "navtool/commands.h"
-#include "navtool/survey/sim_dive.h"
+#include "navtool/survey/survey_dive.h"
 
 namespace nav::tool {
 namespace {

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "nav/core/status.h"
-#include "nav/vision/types.h"
+#include "nav/vision/vision_types.h"
 
 namespace nav::vision {
 

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "nav/vision/registration.h"
-#include "nav/vision/types.h"
+#include "nav/vision/vision_types.h"
 
 namespace nav::vision {
 

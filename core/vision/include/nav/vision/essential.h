@@ -2,7 +2,7 @@
 // Robust essential matrix and the choice of its (R, t) decomposition.
 //
 // Model: x_i^T E x_j = 0 on normalised coordinates, E = [t_i_j]x R_i_j, p_i = R_i_j p_j + t_i_j
-// (types.h). The 5-point minimal solver (Nister, PAMI 26(6), 2004) inside least median of
+// (vision_types.h). The 5-point minimal solver (Nister, PAMI 26(6), 2004) inside least median of
 // squares (Rousseeuw, JASA 79, 1984; Zhang, IJCV 27(2), 1998, for epipolar geometry), as the
 // paper's registration does: LMedS needs no inlier threshold, which suits imagery whose
 // feature noise changes with turbidity and altitude; it assumes more than half the putative
@@ -30,7 +30,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "nav/vision/types.h"
+#include "nav/vision/vision_types.h"
 
 namespace nav::vision {
 

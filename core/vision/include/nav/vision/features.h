@@ -13,7 +13,7 @@
 #include <opencv2/core.hpp>
 
 #include "nav/core/status.h"
-#include "nav/vision/types.h"
+#include "nav/vision/vision_types.h"
 
 namespace nav::vision {
 

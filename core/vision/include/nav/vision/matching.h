@@ -6,7 +6,7 @@
 // pose-constrained search (pccs.h) is measured; descriptor_comparisons counts the distances
 // evaluated (|i| x |j|).
 
-#include "nav/vision/types.h"
+#include "nav/vision/vision_types.h"
 
 namespace nav::vision {
 

@@ -35,7 +35,7 @@
 #include <Eigen/Geometry>
 #include <vector>
 
-#include "nav/vision/types.h"
+#include "nav/vision/vision_types.h"
 
 namespace nav::vision {
 

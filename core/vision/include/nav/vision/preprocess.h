@@ -23,7 +23,7 @@
 #include <cstdint>
 
 #include "nav/core/status.h"
-#include "nav/vision/types.h"
+#include "nav/vision/vision_types.h"
 
 namespace nav::vision {
 

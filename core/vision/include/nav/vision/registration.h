@@ -26,7 +26,7 @@
 #include "nav/vision/pccs.h"
 #include "nav/vision/preprocess.h"
 #include "nav/vision/two_view_refinement.h"
-#include "nav/vision/types.h"
+#include "nav/vision/vision_types.h"
 #include "nav/vision/validation.h"
 
 namespace nav::vision {

@@ -16,7 +16,7 @@
 // naming the baseline when sqrt(t_x^2 + t_y^2) < kMinHorizontalBaseline (relative to |t|).
 #include <Eigen/Core>
 
-#include "nav/vision/types.h"
+#include "nav/vision/vision_types.h"
 
 namespace nav::vision {
 

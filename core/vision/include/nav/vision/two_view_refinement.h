@@ -40,7 +40,7 @@
 #include <string>
 #include <vector>
 
-#include "nav/vision/types.h"
+#include "nav/vision/vision_types.h"
 
 namespace nav::vision {
 

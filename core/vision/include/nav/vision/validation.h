@@ -22,7 +22,7 @@
 #include <string>
 
 #include "nav/vision/two_view_refinement.h"
-#include "nav/vision/types.h"
+#include "nav/vision/vision_types.h"
 
 namespace nav::vision {
 

@@ -1,4 +1,4 @@
-#include "navtool/survey/sim_dive.h"
+#include "navtool/survey/survey_dive.h"
 
 #include <spdlog/spdlog.h>
 
