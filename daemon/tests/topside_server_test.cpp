@@ -45,11 +45,16 @@ class TopsideServerTest : public ::testing::Test {
     fs::remove_all(web_, ignored);
   }
 
-  /// Publishes {"seq": n} until `client` reads it back; true if it did within the deadline.
+  /// Publishes {"seq": n} every 200 ms until `client` reads it back; true if it did within 4 s.
+  /// (A client's handshake can complete before the server has added it to its subscribers, so a
+  /// single publish right after the handshake may reach nobody.)
   bool still_served(RawWsClient& client, int n) {
-    server_->publish_view("TEST", {{"seq", n}}, "");
-    for (auto f = client.read_frame(); f; f = client.read_frame()) {
-      if (f->payload.find("\"seq\":" + std::to_string(n) + "}") != std::string::npos) return true;
+    const std::string wanted = "\"seq\":" + std::to_string(n) + "}";
+    for (int attempt = 0; attempt < 20; ++attempt) {
+      server_->publish_view("TEST", {{"seq", n}}, "");
+      for (auto f = client.read_frame(200); f; f = client.read_frame(200)) {
+        if (f->payload.find(wanted) != std::string::npos) return true;
+      }
     }
     return false;
   }
@@ -62,8 +67,8 @@ class TopsideServerTest : public ::testing::Test {
 bool closed_with(RawWsClient& c, int code) {
   for (auto f = c.read_frame(); f; f = c.read_frame()) {
     if (f->opcode == 8) {
-      return f->payload.size() >= 2 &&
-             ((static_cast<std::uint8_t>(f->payload[0]) << 8) | static_cast<std::uint8_t>(f->payload[1])) == code;
+      return f->payload.size() >= 2 && ((static_cast<std::uint8_t>(f->payload[0]) << 8) |
+                                        static_cast<std::uint8_t>(f->payload[1])) == code;
     }
   }
   return false;
@@ -73,9 +78,13 @@ TEST_F(TopsideServerTest, ServesThePageStatsAndNothingElse) {
   RawWsClient page(port_);
   EXPECT_EQ(page.http("GET / HTTP/1.1\r\nHost: x\r\n\r\n").rfind("HTTP/1.1 200", 0), 0u);
   RawWsClient traversal(port_);
-  EXPECT_EQ(traversal.http("GET /../etc/passwd HTTP/1.1\r\nHost: x\r\n\r\n").rfind("HTTP/1.1 404", 0), 0u);
+  EXPECT_EQ(
+      traversal.http("GET /../etc/passwd HTTP/1.1\r\nHost: x\r\n\r\n").rfind("HTTP/1.1 404", 0),
+      0u);
   RawWsClient post(port_);
-  EXPECT_EQ(post.http("POST /stats HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\n\r\n").rfind("HTTP/1.1 405", 0), 0u);
+  EXPECT_EQ(post.http("POST /stats HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\n\r\n")
+                .rfind("HTTP/1.1 405", 0),
+            0u);
   RawWsClient stats(port_);
   EXPECT_EQ(stats.http("GET /stats HTTP/1.1\r\nHost: x\r\n\r\n").rfind("HTTP/1.1 200", 0), 0u);
   RawWsClient wrong_path(port_);
@@ -130,6 +139,11 @@ TEST_F(TopsideServerTest, StalledClientDropsOldestWithoutDelayingOthersOrThePubl
   ASSERT_TRUE(stalled.handshake("/ws"));
   RawWsClient reader(port_);
   ASSERT_TRUE(reader.handshake("/ws"));
+  ASSERT_TRUE(still_served(reader, -1));  // both clients are subscribers before the burst
+  for (int i = 0; i < 100 && server_->stats().clients < 2; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_EQ(server_->stats().clients, 2u);
   std::atomic<int> last_seen{-1};
   std::thread read_thread([&] {
     for (auto f = reader.read_frame(); f; f = reader.read_frame()) {
@@ -141,7 +155,8 @@ TEST_F(TopsideServerTest, StalledClientDropsOldestWithoutDelayingOthersOrThePubl
   const std::string pad(2000, 'p');
   const auto t0 = std::chrono::steady_clock::now();
   for (int i = 0; i < 5000; ++i) server_->publish_view("TEST", {{"pad", pad}, {"seq", i}}, "");
-  const double publish_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double publish_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   read_thread.join();
   EXPECT_EQ(last_seen.load(), 4999);
   EXPECT_LT(publish_s, 2.0) << "the publisher waited for a client";
