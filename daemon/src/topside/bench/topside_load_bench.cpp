@@ -3,6 +3,7 @@
 // with utime = the publish time (CLOCK_REALTIME us). Reports the latency LCM publish ->
 // WebSocket frame received by the reading clients (p50, p99, max; an upper bound of the
 // bridge's receive -> send), the bridge process's CPU (utime + stime over the run) and RSS.
+// A 5th argument 0 runs the same readers without the stalled client (the baseline).
 // Needs multicast on loopback; run inside its own network namespace, e.g.
 //   unshare -rn sh -c 'ip link set lo up && ip route add 224.0.0.0/4 dev lo &&
 //     build/bin/nav_topside_load_bench build/bin/navtool [clients] [rate_hz] [seconds]'
@@ -18,6 +19,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <mutex>
 #include <navlcm/nav_solution_t.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -62,12 +64,15 @@ double memory_mib(pid_t pid, const std::string& key) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s NAVTOOL [clients=20] [rate_hz=50] [seconds=10]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s NAVTOOL [clients=20] [rate_hz=50] [seconds=10] [stalled=1]\n",
+                 argv[0]);
     return 2;
   }
   const int clients = argc > 2 ? std::atoi(argv[2]) : 20;
   const double rate_hz = argc > 3 ? std::atof(argv[3]) : 50.0;
   const double seconds = argc > 4 ? std::atof(argv[4]) : 10.0;
+  const bool stall =
+      argc > 5 ? std::atoi(argv[5]) != 0 : true;  // 0: the baseline, no stalled client
 
   const pid_t bridge = fork();
   if (bridge == 0) {
@@ -78,12 +83,14 @@ int main(int argc, char** argv) {
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
 
-  nav::tool::test::RawWsClient stalled(kPort, 4096);
-  if (!stalled.handshake("/ws")) {
+  std::optional<nav::tool::test::RawWsClient> stalled;
+  stalled.emplace(kPort, 4096);
+  if (!stalled->handshake("/ws")) {
     std::fprintf(stderr, "bench: navtool topside is not serving on port %d\n", kPort);
     kill(bridge, SIGTERM);
     return 1;
   }
+  if (!stall) stalled.reset();  // the probe connection closes: readers only
   std::mutex mutex;
   std::vector<double> latencies_ms;
   std::atomic<bool> running{true};
@@ -97,7 +104,8 @@ int main(int argc, char** argv) {
         const auto f = ws.read_frame(200);
         if (!f) continue;
         const auto at = f->payload.find("\"utime\":");
-        if (f->payload.find("NAVD_SOLUTION") == std::string::npos || at == std::string::npos) continue;
+        if (f->payload.find("NAVD_SOLUTION") == std::string::npos || at == std::string::npos)
+          continue;
         const std::int64_t sent = std::stoll(f->payload.substr(at + 8));
         if (sent > 0) mine.push_back((now_us() - sent) / 1000.0);
       }
@@ -113,14 +121,17 @@ int main(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   const auto period = std::chrono::duration<double>(1.0 / rate_hz);
   int published = 0;
-  for (; std::chrono::steady_clock::now() - t0 < std::chrono::duration<double>(seconds); ++published) {
+  for (; std::chrono::steady_clock::now() - t0 < std::chrono::duration<double>(seconds);
+       ++published) {
     sol.utime = now_us();
     sol.p_world_m[0] = published * 0.01;
     lcm.publish("NAVD_SOLUTION", &sol);
-    std::this_thread::sleep_until(t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                           period * (published + 1)));
+    std::this_thread::sleep_until(
+        t0 +
+        std::chrono::duration_cast<std::chrono::steady_clock::duration>(period * (published + 1)));
   }
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const double cpu = cpu_s(bridge) - cpu0;
   const double rss = memory_mib(bridge, "VmRSS"), hwm = memory_mib(bridge, "VmHWM");
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
@@ -131,15 +142,18 @@ int main(int argc, char** argv) {
 
   std::sort(latencies_ms.begin(), latencies_ms.end());
   const auto pct = [&](double p) {
-    return latencies_ms.empty() ? -1.0 : latencies_ms[static_cast<std::size_t>(p * (latencies_ms.size() - 1))];
+    return latencies_ms.empty()
+               ? -1.0
+               : latencies_ms[static_cast<std::size_t>(p * (latencies_ms.size() - 1))];
   };
   const double expected = static_cast<double>(published) * (clients - 1);
-  std::printf("{\"clients\": %d, \"stalled\": 1, \"rate_hz\": %.0f, \"published\": %d, "
-              "\"frames_received\": %zu, \"received_fraction\": %.4f, \"latency_ms\": {\"p50\": %.3f, "
-              "\"p99\": %.3f, \"max\": %.3f}, \"bridge_cpu_percent\": %.1f, \"bridge_rss_mib\": %.1f, "
-              "\"bridge_peak_rss_mib\": %.1f}\n",
-              clients, rate_hz, published, latencies_ms.size(), latencies_ms.size() / expected,
-              pct(0.5), pct(0.99), latencies_ms.empty() ? -1.0 : latencies_ms.back(),
-              100.0 * cpu / wall_s, rss, hwm);
+  std::printf(
+      "{\"clients\": %d, \"stalled\": %d, \"rate_hz\": %.0f, \"published\": %d, "
+      "\"frames_received\": %zu, \"received_fraction\": %.4f, \"latency_ms\": {\"p50\": %.3f, "
+      "\"p99\": %.3f, \"max\": %.3f}, \"bridge_cpu_percent\": %.1f, \"bridge_rss_mib\": %.1f, "
+      "\"bridge_peak_rss_mib\": %.1f}\n",
+      clients, stall ? 1 : 0, rate_hz, published, latencies_ms.size(),
+      latencies_ms.size() / expected, pct(0.5), pct(0.99),
+      latencies_ms.empty() ? -1.0 : latencies_ms.back(), 100.0 * cpu / wall_s, rss, hwm);
   return 0;
 }
