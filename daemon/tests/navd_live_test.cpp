@@ -153,9 +153,14 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
       r.frame_id_i = 1;
       r.frame_id_j = 2;
       r.success = true;
+      for (int k = 0; k < 25; k += 6) r.covariance[k] = 1e-4;  // a valid 5x5 covariance
       lcm.publish("NAV_REGISTRATION", &r);
+      lcm.publish("NAV_REGISTRATION", &r);  // duplicate
+      r.frame_id_i = 2;                     // invalid: ids out of order
       lcm.publish("NAV_REGISTRATION", &r);
-      r.frame_id_i = 2;
+      r.frame_id_i = 1;
+      r.frame_id_j = 3;
+      r.covariance[12] = std::nan("");  // invalid: NaN covariance, never applied
       lcm.publish("NAV_REGISTRATION", &r);
       answered = true;
     }
@@ -181,9 +186,9 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
                  << ": LCM not checked";
   }
   ASSERT_GE(got.count, 5) << err;  // 10 Hz once initialised
-  EXPECT_EQ(j["registrations"].get<int>(), 3) << out;
+  EXPECT_EQ(j["registrations"].get<int>(), 4) << out;
   EXPECT_EQ(j["registrations_duplicate"].get<int>(), 1) << out;
-  EXPECT_EQ(j["registrations_invalid"].get<int>(), 1) << out;
+  EXPECT_EQ(j["registrations_invalid"].get<int>(), 2) << out;
   EXPECT_EQ(j["registrations_dropped"].get<int>(), 0) << out;
   EXPECT_NEAR(got.last.rph_rad[2], kHeadingDeg * M_PI / 180.0, 0.01);
   EXPECT_NEAR(got.last.p_world_m[2], 10.0, 0.5);

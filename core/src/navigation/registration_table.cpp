@@ -1,11 +1,40 @@
 // Registration results keyed by frame pair (navigation/registration_table.h).
 #include "nav/core/navigation/registration_table.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
+#include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
 namespace nav::core {
+
+std::optional<std::string> registration_problem(const Registration& r) {
+  const std::string pair =
+      "registration " + std::to_string(r.frame_id_i) + "-" + std::to_string(r.frame_id_j) + ": ";
+  if (r.frame_id_i >= r.frame_id_j) {
+    return "registration: frame_id_i (" + std::to_string(r.frame_id_i) +
+           ") must be smaller than frame_id_j (" + std::to_string(r.frame_id_j) + ")";
+  }
+  if (!r.success) return std::nullopt;  // a failure carries no measurement to check
+  if (!r.z.allFinite()) return pair + "measurement is not finite";
+  constexpr double kPi = std::numbers::pi;
+  for (int k = 0; k < 5; ++k) {
+    const double limit = k == 1 ? kPi / 2 : kPi;
+    if (std::abs(r.z(k)) > limit) {
+      return pair + "measurement component " + std::to_string(k) + " (" + std::to_string(r.z(k)) +
+             " rad) is outside [-" + std::to_string(limit) + ", " + std::to_string(limit) + "]";
+    }
+  }
+  const Eigen::Matrix<double, 5, 5>& P = r.covariance;
+  if (!P.allFinite()) return pair + "covariance is not finite";
+  if ((P - P.transpose()).norm() > 1e-9 * P.norm()) return pair + "covariance is not symmetric";
+  if (Eigen::LLT<Eigen::Matrix<double, 5, 5>>(P).info() != Eigen::Success) {
+    return pair + "covariance is not positive definite";
+  }
+  return std::nullopt;
+}
 
 bool RegistrationTable::insert(const Registration& r) {
   RegistrationResult result;
@@ -15,10 +44,8 @@ bool RegistrationTable::insert(const Registration& r) {
   result.overlap_fraction = r.overlap_fraction;
   result.is_outlier = r.is_outlier;
   result.available_us = r.available_us;
-  if (r.frame_id_i >= r.frame_id_j) {
-    throw std::invalid_argument("registration: frame_id_i (" + std::to_string(r.frame_id_i) +
-                                ") must be smaller than frame_id_j (" +
-                                std::to_string(r.frame_id_j) + ")");
+  if (const std::optional<std::string> problem = registration_problem(r)) {
+    throw std::invalid_argument(*problem);
   }
   if (!results_.emplace(std::make_pair(r.frame_id_i, r.frame_id_j), result).second) return false;
   ++generation_;

@@ -4,7 +4,9 @@
 #include <readerwriterqueue.h>
 #include <spdlog/spdlog.h>
 
+#include <optional>
 #include <stdexcept>
+#include <string>
 
 namespace nav::daemon {
 namespace {
@@ -37,13 +39,13 @@ std::size_t RegistrationInbox::drain() {
   navlcm::registration_t r;
   while (queue_->q.try_dequeue(r)) {
     ++taken;
-    if (r.frame_id_i >= r.frame_id_j) {
+    const core::Registration registration = registration_from_message(r);
+    if (const std::optional<std::string> problem = core::registration_problem(registration)) {
       invalid_.fetch_add(1, kRelaxed);
-      spdlog::warn("navd: registration_t ignored: frame_id_i {} must be smaller than frame_id_j {}",
-                   r.frame_id_i, r.frame_id_j);
+      spdlog::warn("navd: registration_t ignored: {}", *problem);
       continue;
     }
-    if (table_.insert(registration_from_message(r))) {
+    if (table_.insert(registration)) {
       inserted_.fetch_add(1, kRelaxed);
     } else {
       duplicates_.fetch_add(1, kRelaxed);

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <string>
 #include <utility>
 
 namespace nav::core {
@@ -34,13 +35,21 @@ struct RegistrationResult {
   std::int64_t available_us = 0;  ///< Registration::available_us
 };
 
+/// Why `registration` must not reach the filter, or nullopt when it may. An answer crosses a trust
+/// boundary (LCM multicast, a dive log), so before the gate ever sees it: frame_id_i < frame_id_j;
+/// and for a successful registration a finite measurement with azimuth, roll, pitch, heading in
+/// [-pi, pi] and elevation in [-pi/2, pi/2], and a finite, symmetric (relative 1e-9) and positive
+/// definite covariance (Cholesky). A NaN or indefinite covariance would otherwise give a gate
+/// statistic that no threshold test rejects.
+std::optional<std::string> registration_problem(const Registration& registration);
+
 class RegistrationTable {
  public:
   /// Adds the result for (frame_id_i, frame_id_j); false (the table unchanged) when the pair
   /// is already registered: the first answer is kept, so a link applied from it is never
   /// contradicted or applied twice. Requires frame_id_i < frame_id_j (the measurement is
-  /// always camera i -> camera j, earlier to later); throws std::invalid_argument naming both
-  /// ids otherwise.
+  /// always camera i -> camera j, earlier to later) and a valid answer: throws
+  /// std::invalid_argument with registration_problem()'s reason otherwise.
   bool insert(const Registration& registration);
   /// The result for the pair given in either order (its measurement is always from the smaller
   /// frame id to the larger), or nullopt if it was never registered.

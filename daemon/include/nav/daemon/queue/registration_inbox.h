@@ -9,8 +9,10 @@
 //   and counted.
 // * drain() and table() belong to the filter thread (no locks in the filter path): drain()
 //   inserts what arrived into the table before the filter processes the next measurements.
-//   A pair already in the table keeps its first answer (counted `duplicates`); frame_id_i >=
-//   frame_id_j is counted `invalid` and logged (never thrown into the filter thread).
+//   A pair already in the table keeps its first answer (counted `duplicates`); an answer that
+//   core::registration_problem() refuses (frame ids out of order; a non-finite or out-of-range
+//   measurement; a non-finite, asymmetric or indefinite covariance) is counted `invalid` and
+//   logged with the reason, never applied and never thrown into the filter thread.
 // * A registration for a pair the filter never proposes just stays in the table (`unknown` to
 //   the filter: nav/core/navigation/pending_registrations.h).
 
@@ -29,7 +31,7 @@ struct RegistrationInboxCounters {
   std::uint64_t dropped = 0;     ///< offered while the queue was full
   std::uint64_t inserted = 0;    ///< new pairs in the table
   std::uint64_t duplicates = 0;  ///< pair already registered (first answer kept)
-  std::uint64_t invalid = 0;     ///< frame_id_i >= frame_id_j
+  std::uint64_t invalid = 0;     ///< core::registration_problem() refused it
 };
 
 class RegistrationInbox {
