@@ -9,10 +9,10 @@
 #include <cstdio>
 #include <map>
 
+#include "nav/core/navigation/nav_filter.h"
 #include "nav/daemon/config/config.h"
 #include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/queue/registration_inbox.h"
-#include "nav/core/navigation/nav_filter.h"
 #include "support/synthetic_dive.h"
 
 namespace nav::daemon {
@@ -231,6 +231,7 @@ TEST(RegistrationInbox, KeepsTheFirstAnswerCountsInvalidAndDrops) {
   r.frame_id_i = 1;
   r.frame_id_j = 2;
   r.success = true;
+  for (int k = 0; k < 25; k += 6) r.covariance[k] = 1e-4;  // a valid 5x5 covariance
   r.measurement[0] = 0.1;
   ASSERT_TRUE(inbox.offer(r));
   r.measurement[0] = 0.2;
