@@ -6,7 +6,7 @@
 // stopped, 1 s later navd gets SIGTERM.
 // Contract asserted: exit status 0 within kStopBound of the SIGTERM (wall, including process
 // teardown; generous for a loaded 2-core machine) and the shutdown checkpoint on disk. The
-// measured stop time is in daemon/apps/navd/README.md (about 0.35 s; 14 s before the fix).
+// measured stop time is in apps/navd/README.md (about 0.35 s; 14 s before the fix).
 // Skips with the reason when the fake camera binary is absent or namespaces are not permitted.
 #include <fcntl.h>
 #include <gtest/gtest.h>

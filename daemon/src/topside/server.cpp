@@ -319,7 +319,7 @@ void TopsideServer::publish_view(const std::string& channel, const nlohmann::jso
     }
     for (auto& [hdl, c] : impl_->clients) {
       if (c->foxglove) continue;
-      if (c->queue.size() == c->queue.capacity()) ++impl_->stats.frames_dropped;
+      if (c->queue.full()) ++impl_->stats.frames_dropped;
       c->queue.push({text, false});
     }
   }
@@ -334,7 +334,7 @@ void TopsideServer::publish_foxglove(std::uint32_t channel_id, std::uint64_t log
     for (auto& [hdl, c] : impl_->clients) {
       const auto [begin, end] = c->subscription_by_channel.equal_range(channel_id);
       for (auto it = begin; it != end; ++it) {
-        if (c->queue.size() == c->queue.capacity()) ++impl_->stats.frames_dropped;
+        if (c->queue.full()) ++impl_->stats.frames_dropped;
         c->queue.push({std::make_shared<const std::string>(
                            message_data_frame(it->second, log_time_ns, payload)),
                        true});

@@ -44,7 +44,7 @@ class DeviceSources {
   /// Joins the threads that return by `deadline` (stop must have been set) and detaches the
   /// others, whose sensor names it returns: a thread stuck in a device call that cannot be
   /// interrupted (an Aravis GVCP transaction to a vanished or hung GigE camera blocks 2.5-5 s,
-  /// several in a row at stop: daemon/apps/navd/README.md). After a non-empty return this object,
+  /// several in a row at stop: apps/navd/README.md). After a non-empty return this object,
   /// the queue, the LCM and the health board must stay alive until the process ends: the caller
   /// ends it (navd: std::_Exit after its final checkpoint and log lines).
   std::vector<std::string> join_until(std::chrono::steady_clock::time_point deadline);

@@ -35,7 +35,7 @@ class ClientQueue {
 
   bool empty() const { return frames_.empty(); }
   std::size_t size() const { return frames_.size(); }
-  std::size_t capacity() const { return capacity_; }
+  bool full() const { return frames_.size() == capacity_; }
   std::uint64_t dropped() const { return dropped_; }
 
   /// Removes and returns the oldest frame; precondition: !empty().
