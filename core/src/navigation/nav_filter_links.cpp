@@ -1,5 +1,5 @@
 // NavFilter's camera links: proposal at each image, registration look-up or deferral, gate and
-// update (the test, gate and linearisation: navigation/link_gate.h; deferral:
+// update (the test: navigation/link_proposer.h; gate and linearisation: link_gate.h; deferral:
 // navigation/pending_registrations.h).
 #include <string>
 #include <utility>

@@ -1,12 +1,6 @@
 #pragma once
-// Camera links between delayed states (Eustice et al., RSS 2005 sec. IV): which pairs to
-// propose from the Algorithm 1 bounds, and the gate and linearisation of a registered pair.
-//
-// Proposal test: with Δ = p_i − p_r (world x, y) and its covariance C from the certified
-// proposal joint [Σ_rr Σ_ri; Σ_ir Σ~_ii], the pair is proposed when the confidence ellipse
-// Δᵀ C⁻¹ Δ <= chi2(2 dof, confidence) can reach within D of the origin, tested as
-//   ‖Δ‖ − sqrt(chi2 · λmax(C)) < D,   D = r_i + r_j + 2 ‖lever_xy‖,
-// r = altitude · footprint half-diagonal per metre (the two images' footprints can touch).
+// Camera links between delayed states (Eustice et al., RSS 2005 sec. IV): the gate and
+// linearisation of a registered pair (which pairs to propose: link_proposer.h).
 //
 // Gate: d² = νᵀ (H J Hᵀ + R)⁻¹ ν with ν = z − h(μ_i, μ_j) (angles wrapped), H = [H_j H_i] and
 // J = [Σ^_jj Σ^_ji; Σ^_ij Σ~_ii]: the proposal joint WITHOUT the truncation inflation ε I of
@@ -29,27 +23,10 @@
 #include "nav/core/navigation/nav_filter_records.h"
 #include "nav/core/navigation/registration_table.h"
 #include "nav/core/recovery/bounds.h"
-#include "nav/core/recovery/state_recovery.h"
 
 namespace nav::core {
 
 using WarningSink = std::function<void(const std::string&)>;
-
-class LinkProposer {
- public:
-  /// confidence in (0, 1); footprint half-diagonal per metre of altitude; the camera's mount.
-  LinkProposer(double confidence, double footprint_per_altitude, const Vec6& x_body_camera);
-
-  /// The proposal test (file comment) for delayed state `block` (image altitude altitude_i_m)
-  /// against the robot (altitude_j_m); on a proposal fills `joint` from the bounds.
-  bool propose(const Esdf& filter, const CovarianceBounds& bounds, const StateRecovery& recovery,
-               int block, double altitude_i_m, double altitude_j_m, LinkProposal* joint) const;
-
- private:
-  double chi2_2dof_;
-  double footprint_per_altitude_;
-  double lever_xy_m_;
-};
 
 class LinkGate {
  public:

@@ -46,6 +46,7 @@
 #include "nav/core/navigation/aid_sources.h"
 #include "nav/core/navigation/innovation_stats.h"
 #include "nav/core/navigation/link_gate.h"
+#include "nav/core/navigation/link_proposer.h"
 #include "nav/core/navigation/nav_filter_options.h"
 #include "nav/core/navigation/nav_filter_records.h"
 #include "nav/core/navigation/pending_registrations.h"
