@@ -59,6 +59,9 @@ std::string PlayerOptions::validate() const {
   if (!registration_lcm_url.empty() && registration_channel.empty()) {
     return "registration_channel is empty";
   }
+  for (const PlayerFault& f : faults) {
+    if (std::string why = f.validate(); !why.empty()) return why;
+  }
   return {};
 }
 
@@ -73,6 +76,7 @@ struct DivePlayer::Impl {
   FakeGigeCamera camera;
   std::unique_ptr<lcm::LCM> registration_lcm;       ///< registration_lcm_url, when set
   std::unique_ptr<CameraPlayback> camera_playback;  ///< when the camera is played
+  std::vector<std::int64_t> fault_counts;           ///< messages per options.faults entry
 
   void resolve_paths(const fs::path& dive);
   void plan_sensors(const daemon::NavdConfig& config);
@@ -82,6 +86,10 @@ struct DivePlayer::Impl {
   void start_clock(std::int64_t dive_us, PlayReport& report) const;
   /// Whether the message went to a device.
   bool write_raw(const navlcm::raw_bytes_t& raw, PlayReport& report);
+  /// The bytes to write for a message of sensor `index` at `dive_s` under the faults (empty:
+  /// none); closes / reopens the sensor's pty for kUnplug.
+  std::vector<std::uint8_t> faulted_bytes(std::size_t index, double dive_s,
+                                          std::span<const std::uint8_t> bytes, PlayedSensor& s);
   /// Publishes a registration now, utime = the host's realtime.
   bool publish_registration(navlcm::registration_t r);
 };
@@ -156,8 +164,9 @@ bool DivePlayer::Impl::wait_for_readers(const std::atomic<bool>& stop) const {
           ? daemon::monotonic_us() + options.reader_timeout.count() * 1000
           : INT64_MAX;
   while (!stop.load() && daemon::monotonic_us() < give_up_us) {
-    const bool all = std::all_of(ptys.begin(), ptys.end(),
-                                 [](const auto& p) { return p.second->reader_attached(); });
+    const bool all = std::all_of(ptys.begin(), ptys.end(), [](const auto& p) {
+      return p.second && p.second->reader_attached();
+    });
     if (all) return true;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
@@ -172,6 +181,28 @@ void DivePlayer::Impl::start_clock(std::int64_t dive_us, PlayReport& report) con
   if (options.on_start) options.on_start(report.dive_start_us, report.host_start_us);
 }
 
+std::vector<std::uint8_t> DivePlayer::Impl::faulted_bytes(std::size_t index, double dive_s,
+                                                          std::span<const std::uint8_t> bytes,
+                                                          PlayedSensor& s) {
+  std::vector<std::uint8_t> out(bytes.begin(), bytes.end());
+  bool unplugged = false;
+  for (std::size_t k = 0; k < options.faults.size(); ++k) {
+    const PlayerFault& f = options.faults[k];
+    if (f.sensor != s.name || !f.active(dive_s)) continue;
+    unplugged = unplugged || f.kind == FaultKind::kUnplug;
+    out = apply_fault(f, out, fault_counts[k]++);
+    ++s.faulted;
+  }
+  auto pty = ptys.find(index);
+  if (pty != ptys.end() && unplugged && pty->second) {
+    pty->second.reset();  // closes the master: the reader sees the device vanish
+    ++s.unplugs;
+  } else if (pty != ptys.end() && !unplugged && !pty->second) {
+    pty->second = std::make_unique<PtyLink>(options.serial_dir / s.name);  // plugged back in
+  }
+  return out;
+}
+
 bool DivePlayer::Impl::write_raw(const navlcm::raw_bytes_t& raw, PlayReport& report) {
   const auto it = by_name.find(raw.device);
   if (it == by_name.end()) {
@@ -179,7 +210,11 @@ bool DivePlayer::Impl::write_raw(const navlcm::raw_bytes_t& raw, PlayReport& rep
     return false;
   }
   PlayedSensor& sensor = report.sensors[it->second];
-  const std::span<const std::uint8_t> bytes(raw.data.data(), raw.data.size());
+  const double dive_s = (raw.host_monotonic_us - report.dive_start_us) * 1e-6;
+  const std::vector<std::uint8_t> played = faulted_bytes(
+      it->second, dive_s, std::span<const std::uint8_t>(raw.data.data(), raw.data.size()), sensor);
+  const std::span<const std::uint8_t> bytes(played);
+  if (bytes.empty()) return false;
   if (sensor.output == SensorOutput::kPty) {
     const std::size_t written = ptys.at(it->second)->write(bytes);
     sensor.bytes += static_cast<std::int64_t>(written);
@@ -199,6 +234,7 @@ DivePlayer::DivePlayer(const fs::path& dive, PlayerOptions options)
     throw std::runtime_error("hil player options: " + why);
   }
   impl_->options = std::move(options);
+  impl_->fault_counts.assign(impl_->options.faults.size(), 0);
   impl_->resolve_paths(dive);
   impl_->config_text = read_text(impl_->config_path);
   impl_->plan_sensors(daemon::load_config_file(impl_->config_path.string()));

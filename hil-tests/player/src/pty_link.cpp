@@ -32,11 +32,14 @@ PtyLink::PtyLink(std::filesystem::path link_path) : link_path_(std::move(link_pa
     (void)::tcsetattr(slave, TCSANOW, &raw);
   }
   ::close(slave);
+  // Close-on-exec: a reader this process forks and execs (navd in the HIL tests and the fault
+  // campaign) must not inherit the master, else closing it here would not hang the line up.
   const int flags = ::fcntl(master_, F_GETFL);
-  if (flags < 0 || ::fcntl(master_, F_SETFL, flags | O_NONBLOCK) != 0) {
+  if (flags < 0 || ::fcntl(master_, F_SETFL, flags | O_NONBLOCK) != 0 ||
+      ::fcntl(master_, F_SETFD, FD_CLOEXEC) != 0) {
     const int err = errno;
     ::close(master_);
-    fail(link_path_, "fcntl(O_NONBLOCK)", err);
+    fail(link_path_, "fcntl(O_NONBLOCK, FD_CLOEXEC)", err);
   }
   std::error_code ec;
   if (std::filesystem::is_symlink(std::filesystem::symlink_status(link_path_, ec))) {

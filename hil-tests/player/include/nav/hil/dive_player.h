@@ -39,6 +39,8 @@
 #include <string>
 #include <vector>
 
+#include "nav/hil/player_faults.h"
+
 namespace nav::hil {
 
 struct PlayerOptions {
@@ -65,6 +67,8 @@ struct PlayerOptions {
   std::string registration_lcm_url;
   /// Channel they are published on (navd's lcm.channels.registration by default).
   std::string registration_channel = "NAV_REGISTRATION";
+  /// Sensor faults injected into the played bytes (player_faults.h); empty: none.
+  std::vector<PlayerFault> faults;
 
   /// "" if valid, else what is wrong.
   std::string validate() const;
@@ -82,6 +86,8 @@ struct PlayedSensor {
   std::int64_t bytes = 0;           ///< bytes (pty) or frames' data bytes (CAN) written
   std::int64_t dropped_bytes = 0;   ///< pty: bytes the reader had no room for / no reader
   std::int64_t dropped_frames = 0;  ///< CAN: lines that did not parse or frames not sent
+  std::int64_t faulted = 0;         ///< messages a PlayerFault withheld or changed
+  std::int64_t unplugs = 0;         ///< times its pty was closed by a kUnplug fault
 };
 
 /// The camera part of the playback (camera_playback.h), when a camera is played.

@@ -1,0 +1,257 @@
+// One fault scenario end to end (fault_campaign.h): the dive played by the HIL player to the
+// real navd (live, --checkpoints), an LCM listener thread recording what navd publishes, the
+// host fault done on the dive's clock, then the measurements (scenario_metrics.h).
+#include "scenario_run.h"
+
+#include <signal.h>
+#include <yaml-cpp/yaml.h>
+
+#include <atomic>
+#include <fstream>
+#include <lcm/lcm-cpp.hpp>
+#include <mutex>
+#include <random>
+#include <stdexcept>
+#include <thread>
+
+#include "host_faults.h"
+#include "nav/daemon/system/host_clock.h"
+#include "nav/hil/dive_player.h"
+
+namespace nav::campaign {
+namespace fs = std::filesystem;
+namespace {
+
+/// Records NAVD_SOLUTION / NAVD_HEALTH / NAVD_BOUNDS_SNAPSHOT on its own thread.
+class Listener {
+ public:
+  explicit Listener(const std::string& url) : lcm_(url) {
+    if (!lcm_.good()) throw std::runtime_error("fault campaign: cannot open LCM " + url);
+    lcm_.subscribe("NAVD_SOLUTION", &Listener::on_solution, this);
+    lcm_.subscribe("NAVD_HEALTH", &Listener::on_health, this);
+    lcm_.subscribe("NAVD_BOUNDS_SNAPSHOT", &Listener::on_snapshot, this);
+    thread_ = std::thread([this] {
+      while (!stop_.load()) lcm_.handleTimeout(50);
+    });
+  }
+  ~Listener() { stop(); }
+  void stop() {
+    stop_.store(true);
+    if (thread_.joinable()) thread_.join();
+  }
+  /// Delayed states of the newest solution published before `realtime_us` (-1: none).
+  int delayed_states_before(std::int64_t realtime_us) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    int n = -1;
+    for (const auto& s : rec_.solutions) {
+      if (s.utime < realtime_us) n = s.num_delayed_states;
+    }
+    return n;
+  }
+  /// Delayed states of the first solution published after `realtime_us` (-1: none yet).
+  int delayed_states_after(std::int64_t realtime_us) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& s : rec_.solutions) {
+      if (s.utime > realtime_us) return s.num_delayed_states;
+    }
+    return -1;
+  }
+  /// Realtime of the first solution received after `realtime_us` (0: none).
+  std::int64_t first_solution_after(std::int64_t realtime_us) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& s : rec_.solutions) {
+      if (s.utime > realtime_us) return s.utime;
+    }
+    return 0;
+  }
+  Recording take() {
+    stop();
+    return std::move(rec_);
+  }
+
+ private:
+  void on_solution(const lcm::ReceiveBuffer*, const std::string&, const navlcm::nav_solution_t* m) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (m->filter_status != 2) rec_.solutions.push_back(*m);
+  }
+  void on_health(const lcm::ReceiveBuffer*, const std::string&, const navlcm::health_t* m) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    rec_.health.push_back(*m);
+  }
+  void on_snapshot(const lcm::ReceiveBuffer*, const std::string&,
+                   const navlcm::bounds_snapshot_t* m) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    rec_.last_snapshot = *m;
+  }
+  lcm::LCM lcm_;
+  std::mutex mutex_;
+  Recording rec_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+/// The player's navd config with checkpoint.path in the scenario's directory.
+void write_config(const hil::DivePlayer& player, const fs::path& path, const std::string& url,
+                  const fs::path& checkpoints) {
+  player.write_navd_config(path, url);
+  YAML::Node config = YAML::LoadFile(path.string());
+  config["checkpoint"]["path"] = checkpoints.string();
+  std::ofstream out(path, std::ios::trunc);
+  out << config << "\n";
+  if (!out) throw std::runtime_error(path.string() + ": cannot write the navd config");
+}
+
+/// The host fault's start / end, on the main thread.
+struct HostAction {
+  const FaultScenario& scenario;
+  const fs::path& dir;
+  const fs::path& checkpoints;
+  std::vector<pid_t> burners;
+  std::string notes;
+
+  void note(const std::string& what) {
+    if (!what.empty()) notes += (notes.empty() ? "" : "; ") + what;
+  }
+  void start() {
+    switch (scenario.host) {
+      case HostFault::kCpuSaturation:
+        burners = start_cpu_burners(2);
+        note(std::to_string(burners.size()) + " spinning processes");
+        break;
+      case HostFault::kRouteRemoved:
+        note(delete_multicast_route());
+        break;
+      case HostFault::kCheckpointDiskFull:
+        note(fill_until_full(checkpoints / "filler"));
+        break;
+      default:
+        break;
+    }
+  }
+  void end() {
+    stop_processes(burners);
+    burners.clear();
+    if (scenario.host == HostFault::kRouteRemoved) note(add_multicast_route());
+    if (scenario.host == HostFault::kCheckpointDiskFull) {
+      std::error_code ec;
+      fs::remove(checkpoints / "filler", ec);
+    }
+  }
+};
+
+}  // namespace
+
+ScenarioResult run_scenario(const FaultScenario& scenario, const ScenarioSetup& setup) {
+  ScenarioResult out;
+  out.name = scenario.name;
+  out.description = scenario.description;
+  const fs::path dir = setup.out_dir / "scenarios" / scenario.name;
+  const fs::path checkpoints = dir / "checkpoints";
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+  fs::create_directories(checkpoints);
+  if (scenario.host == HostFault::kCheckpointDiskFull) {
+    if (std::string e = mount_small_tmpfs(checkpoints, 4096); !e.empty()) out.notes = e;
+  }
+
+  hil::PlayerOptions po;
+  po.serial_dir = dir / "tty";
+  po.reader_timeout = std::chrono::seconds(30);
+  po.fake_gige_camera = setup.camera;
+  po.camera_image_dir = "none";
+  po.faults = scenario.player_faults;
+  std::atomic<bool> mapped{false};
+  TimeMap map;
+  po.on_start = [&](std::int64_t dive_start_us, std::int64_t host_start_us) {
+    map.dive_start_us = dive_start_us;
+    map.host_start_us = host_start_us;
+    map.realtime_start_us = daemon::realtime_us() - (daemon::monotonic_us() - host_start_us);
+    mapped.store(true);
+  };
+  hil::DivePlayer player(setup.dive_dir, po);
+  write_config(player, dir / "navd.yaml", setup.lcm_url, checkpoints);
+  const std::vector<std::string> args{"--config", (dir / "navd.yaml").string(), "--checkpoints"};
+
+  Listener listener(setup.lcm_url);
+  pid_t navd = spawn_logged(setup.navd_path, args, dir);
+  if (navd <= 0) throw std::runtime_error("fault campaign: cannot start " + setup.navd_path.string());
+  std::atomic<bool> stop_play{false}, played{false};
+  hil::PlayReport report;
+  std::thread play([&] {
+    report = player.play(stop_play);
+    played.store(true);
+  });
+
+  HostAction action{scenario, dir, checkpoints, {}, out.notes};
+  std::mt19937_64 rng(setup.seed);
+  const double kill_s =
+      scenario.from_s + std::uniform_real_distribution<double>(0.0, 1.0)(rng) *
+                            (scenario.to_s - scenario.from_s);
+  bool started = false, ended = false, killed = false;
+  std::int64_t fault_realtime_us = 0, end_realtime_us = 0, restart_realtime_us = 0;
+  int states_before_kill = -1;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(setup.give_up_s);
+  while (!played.load() && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (!mapped.load()) continue;
+    const double now_s = map.dive_s(daemon::monotonic_us());
+    if (!started && now_s >= scenario.from_s) {
+      started = true;
+      fault_realtime_us = daemon::realtime_us();
+      action.start();
+    }
+    if (scenario.host == HostFault::kKillRestart && !killed && now_s >= kill_s) {
+      killed = true;
+      states_before_kill = listener.delayed_states_before(daemon::realtime_us());
+      ::kill(navd, SIGKILL);
+      (void)wait_exit_ms(navd, 2000);
+      restart_realtime_us = daemon::realtime_us();
+      navd = spawn_logged(setup.navd_path, args, dir);
+      action.note("SIGKILL at dive " + std::to_string(kill_s).substr(0, 5) + " s, restarted");
+    }
+    if (started && !ended && now_s >= scenario.to_s) {
+      ended = true;
+      end_realtime_us = daemon::realtime_us();
+      action.end();
+    }
+  }
+  if (!ended) action.end();
+  stop_play.store(true);
+  play.join();
+  std::this_thread::sleep_for(std::chrono::seconds(2));  // navd's last solutions and health
+  bool alive = false;
+  (void)wait_exit_ms(navd, 0, &alive);
+  out.navd_alive = alive;
+  if (alive) ::kill(navd, SIGTERM);
+  out.navd_exit_code = alive ? wait_exit_ms(navd, 5000) : -1;
+  if (killed) {
+    const int after = listener.delayed_states_after(restart_realtime_us);
+    out.delayed_states_lost = after < 0 ? states_before_kill : std::max(0, states_before_kill - after);
+    action.note("delayed states " + std::to_string(states_before_kill) + " before the kill, " +
+                std::to_string(after) + " at the first solution after the restart");
+  }
+  if (scenario.host == HostFault::kRouteRemoved && end_realtime_us > 0) {
+    const std::int64_t back = listener.first_solution_after(end_realtime_us);
+    action.note(back > 0 ? "solutions heard again " +
+                               std::to_string((back - end_realtime_us) * 1e-6).substr(0, 4) +
+                               " s after the route came back"
+                         : "no solution heard after the route came back");
+  }
+  if (scenario.host == HostFault::kCheckpointDiskFull) action.note(unmount(checkpoints));
+  Recording rec = listener.take();
+  write_health_csv(rec, dir / "health.csv");
+  out.player_max_late_s = report.max_late_s;
+  out.notes = action.notes;
+  if (!report.started) {
+    out.reason = "navd never opened the played devices";
+    return out;
+  }
+  const TruthTrack truth(setup.dive_dir / "truth.csv");
+  fill_track_metrics(rec, truth, map, scenario, out);
+  fill_detection(rec, fault_realtime_us, scenario, out);
+  out.map_xy_rms_m = map_xy_rms_m(rec, truth, map);
+  judge(scenario, out);
+  return out;
+}
+
+}  // namespace nav::campaign
