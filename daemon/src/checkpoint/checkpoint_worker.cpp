@@ -1,6 +1,8 @@
 // Checkpoint thread: one-slot mailbox from the filter thread, atomic writes (checkpoint_worker.h).
 #include "nav/daemon/checkpoint/checkpoint_worker.h"
 
+#include <spdlog/spdlog.h>
+
 #include <chrono>
 #include <utility>
 
@@ -41,6 +43,9 @@ void CheckpointWorker::write(Pending& job) {
     stats_.last_bytes = job.payload.size();
     stats_.last_write_ms = ms;
   } else {
+    // Logged too (a full disk was silent before: docs/faults.md), once per failed write, at
+    // most once per checkpoint.period_s.
+    spdlog::warn("navd: checkpoint write {} failed: {}", stats_.failed + 1, r.error);
     ++stats_.failed;
     stats_.last_error = r.error;
   }

@@ -11,8 +11,9 @@
 //                  with its checksum); other sentences pass unchanged;
 //   kDepthSpike    Paroscientific only: every reply in the window reads `value` metres deeper
 //                  and shallower in turn (+value, -value, ...): the pressure moves by
-//                  value x 1025 kg/m^3 x 9.80665 m/s^2 (a hydrostatic approximation; the
-//                  decoded depth moves by value within 1 %);
+//                  value x 1025 kg/m^3 x 9.80665 m/s^2 (hydrostatic, surface density: at
+//                  3,800 m, where seawater is denser, the UNESCO 1983 depth moves by 0.98 x
+//                  value);
 //   kUnplug        the sensor's pty is closed at from_s (navd sees the device vanish: EIO /
 //                  POLLHUP, the symlink removed) and a new pty is opened under the same
 //                  symlink at to_s; messages in between are not written.
