@@ -47,9 +47,8 @@ void run_fault_campaign(const FaultCampaignArgs& args) {
   o.only = args.only;
   o.seed = args.seed;
   if (!fs::exists(o.navd_path)) {
-    throw CommandError("fault-campaign: navd not found at " + o.navd_path.string() +
-                           " (give --navd)",
-                       2);
+    throw CommandError(
+        "fault-campaign: navd not found at " + o.navd_path.string() + " (give --navd)", 2);
   }
   if (!fs::exists(o.sim_config)) {
     throw CommandError("fault-campaign: " + o.sim_config.string() + ": no such config", 2);

@@ -108,8 +108,8 @@ TEST(PlayerFaults, DepthSpikesAlternateByTenMetresOfUnesco1983Depth) {
   // Surface density x g: 9.80 m at 3,800 m (player_faults.h)
   EXPECT_NEAR(deeper, 9.80, 0.02);
   EXPECT_NEAR(shallower, -9.80, 0.02);
-  EXPECT_TRUE(nav::hil::apply_fault(PlayerFault{FaultKind::kDrop, "depth", 0, 1, 0}, reply, 0)
-                  .empty());
+  EXPECT_TRUE(
+      nav::hil::apply_fault(PlayerFault{FaultKind::kDrop, "depth", 0, 1, 0}, reply, 0).empty());
 }
 
 TEST(PlayerFaults, ValidateNamesTheBadWindow) {

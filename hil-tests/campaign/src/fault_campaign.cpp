@@ -2,14 +2,15 @@
 // fault_campaign.h.
 #include "nav/campaign/fault_campaign.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <map>
 #include <stdexcept>
 
+#include "campaign_dive.h"
 #include "host_faults.h"
-#include "nav/sim/simulate.h"
 #include "scenario_run.h"
 
 namespace nav::campaign {
@@ -21,15 +22,8 @@ constexpr double kNeesBound = 6.0;  ///< 95 % of chi-square, 2 DOF (5.99)
 
 /// The dive of `images` images in out_dir/dives (simulated once, then reused).
 fs::path dive_for(const CampaignOptions& o, int images) {
-  const fs::path dir = o.out_dir / "dives" / ("dive_" + std::to_string(images));
-  if (fs::exists(dir / "truth.csv") && fs::exists(dir / "dive.lcmlog")) return dir;
-  sim::SimOptions so;
-  so.out_dir = dir.string();
-  so.seed = o.seed;
-  so.mission.images = images;
-  so.sensor_errors.dvl_dropouts_per_hour = 0.0;  // the campaign's own outages only
-  (void)sim::simulate_dive(so, o.sim_config.string());
-  return dir;
+  return simulated_dive(o.out_dir / "dives" / ("dive_" + std::to_string(images)), images, o.seed,
+                        o.sim_config, false);
 }
 
 std::string fmt(const char* format, double value) {
@@ -73,7 +67,8 @@ void judge(const FaultScenario& scenario, ScenarioResult& r) {
 std::vector<ScenarioResult> run_campaign(const CampaignOptions& o) {
   fs::create_directories(o.out_dir);
   const std::string netns = enter_private_namespaces();
-  if (!netns.empty()) std::fprintf(stderr, "fault campaign: no private namespaces (%s)\n", netns.c_str());
+  if (!netns.empty())
+    std::fprintf(stderr, "fault campaign: no private namespaces (%s)\n", netns.c_str());
   std::vector<ScenarioResult> results;
   for (const FaultScenario& s : standard_scenarios(o.short_version)) {
     if (!o.only.empty() && std::find(o.only.begin(), o.only.end(), s.name) == o.only.end()) {
@@ -104,7 +99,8 @@ std::string campaign_markdown(const std::vector<ScenarioResult>& results) {
       "|---|---|---|---|---|---|---|---|---|\n";
   for (const ScenarioResult& r : results) {
     const std::string detected =
-        r.detected_after_s < 0.0 ? "-" : fmt("%.1f", r.detected_after_s) + ", `" + r.detected_by + "`";
+        r.detected_after_s < 0.0 ? "-"
+                                 : fmt("%.1f", r.detected_after_s) + ", `" + r.detected_by + "`";
     md += "| " + r.name + ": " + r.description + " | " + detected + " | " +
           fmt("%.3f", r.max_xy_error_m) + " | " + fmt("%.2f", r.nees_before) + " / " +
           fmt("%.2f", r.nees_during) + " / " + fmt("%.2f", r.nees_after) + " | " +

@@ -27,8 +27,8 @@ FaultScenario sensor_fault(std::string name, std::string description, FaultKind 
   return s;
 }
 
-FaultScenario host_fault(std::string name, std::string description, HostFault host,
-                         double from_s, double to_s) {
+FaultScenario host_fault(std::string name, std::string description, HostFault host, double from_s,
+                         double to_s) {
   FaultScenario s;
   s.name = std::move(name);
   s.description = std::move(description);
@@ -72,8 +72,8 @@ const char* to_string(Detector detector) {
 
 std::vector<FaultScenario> standard_scenarios(bool short_version) {
   if (short_version) {
-    return {sensor_fault("dvl_dropout_15s", "DVL silent for 15 s", FaultKind::kDrop, "dvl", 15,
-                         30, 0, Detector::kSilent),
+    return {sensor_fault("dvl_dropout_15s", "DVL silent for 15 s", FaultKind::kDrop, "dvl", 15, 30,
+                         0, Detector::kSilent),
             sensor_fault("depth_spikes_10m", "depth +-10 m on every reply for 10 s",
                          FaultKind::kDepthSpike, "depth", 15, 25, 10, Detector::kRejected),
             sensor_fault("heading_unplug_10s", "heading pty closed 10 s, reopened",
@@ -91,8 +91,8 @@ std::vector<FaultScenario> standard_scenarios(bool short_version) {
                    Detector::kRejected),
       sensor_fault("depth_spikes_10m", "depth +-10 m on every reply for 20 s",
                    FaultKind::kDepthSpike, "depth", 30, 50, 10, Detector::kRejected),
-      sensor_fault("dvl_unplug_20s", "DVL pty closed 20 s, reopened", FaultKind::kUnplug, "dvl",
-                   30, 50, 0, Detector::kDisconnected),
+      sensor_fault("dvl_unplug_20s", "DVL pty closed 20 s, reopened", FaultKind::kUnplug, "dvl", 30,
+                   50, 0, Detector::kDisconnected),
       host_fault("cpu_saturation_60s", "both cores busy (2 spinning processes) for 60 s",
                  HostFault::kCpuSaturation, 25, 85),
       host_fault("multicast_route_20s", "route 224.0.0.0/4 deleted for 20 s",

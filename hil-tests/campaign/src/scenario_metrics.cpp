@@ -153,11 +153,10 @@ void fill_detection(const Recording& rec, std::int64_t fault_realtime_us,
 void write_health_csv(const Recording& rec, const std::filesystem::path& path) {
   std::ofstream out(path, std::ios::trunc);
   out << "utime,queue_depth,cpu_percent,rss_mb";
-  const auto widest = std::max_element(
-      rec.health.begin(), rec.health.end(),
-      [](const navlcm::health_t& a, const navlcm::health_t& b) {
-        return a.sensors.size() < b.sensors.size();
-      });
+  const auto widest = std::max_element(rec.health.begin(), rec.health.end(),
+                                       [](const navlcm::health_t& a, const navlcm::health_t& b) {
+                                         return a.sensors.size() < b.sensors.size();
+                                       });
   if (widest != rec.health.end()) {
     for (const navlcm::sensor_health_t& s : widest->sensors) {
       for (const char* f : {"connected", "age_s", "records", "decode_errors", "reconnects",

@@ -174,7 +174,8 @@ ScenarioResult run_scenario(const FaultScenario& scenario, const ScenarioSetup& 
 
   Listener listener(setup.lcm_url);
   pid_t navd = spawn_logged(setup.navd_path, args, dir);
-  if (navd <= 0) throw std::runtime_error("fault campaign: cannot start " + setup.navd_path.string());
+  if (navd <= 0)
+    throw std::runtime_error("fault campaign: cannot start " + setup.navd_path.string());
   std::atomic<bool> stop_play{false}, played{false};
   hil::PlayReport report;
   std::thread play([&] {
@@ -184,9 +185,8 @@ ScenarioResult run_scenario(const FaultScenario& scenario, const ScenarioSetup& 
 
   HostAction action{scenario, dir, checkpoints, {}, out.notes};
   std::mt19937_64 rng(setup.seed);
-  const double kill_s =
-      scenario.from_s + std::uniform_real_distribution<double>(0.0, 1.0)(rng) *
-                            (scenario.to_s - scenario.from_s);
+  const double kill_s = scenario.from_s + std::uniform_real_distribution<double>(0.0, 1.0)(rng) *
+                                              (scenario.to_s - scenario.from_s);
   bool started = false, ended = false, killed = false;
   std::int64_t fault_realtime_us = 0, end_realtime_us = 0, restart_realtime_us = 0;
   int states_before_kill = -1;
@@ -226,7 +226,8 @@ ScenarioResult run_scenario(const FaultScenario& scenario, const ScenarioSetup& 
   out.navd_exit_code = alive ? wait_exit_ms(navd, 5000) : -1;
   if (killed) {
     const int after = listener.delayed_states_after(restart_realtime_us);
-    out.delayed_states_lost = after < 0 ? states_before_kill : std::max(0, states_before_kill - after);
+    out.delayed_states_lost =
+        after < 0 ? states_before_kill : std::max(0, states_before_kill - after);
     action.note("delayed states " + std::to_string(states_before_kill) + " before the kill, " +
                 std::to_string(after) + " at the first solution after the restart");
   }

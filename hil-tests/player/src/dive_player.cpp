@@ -18,9 +18,9 @@
 #include "camera_playback.h"
 #include "can_output.h"
 #include "fake_gige_camera.h"
-#include "nav/daemon/system/host_clock.h"
 #include "nav/daemon/config/config.h"
 #include "nav/daemon/log/dive_log.h"
+#include "nav/daemon/system/host_clock.h"
 #include "nav/hil/pty_link.h"
 #include "navd_config_yaml.h"
 
@@ -59,6 +59,10 @@ std::string PlayerOptions::validate() const {
   if (!registration_lcm_url.empty() && registration_channel.empty()) {
     return "registration_channel is empty";
   }
+  if (repeat < 1) return "repeat " + std::to_string(repeat) + " is < 1";
+  if (repeat > 1 && fake_gige_camera) {
+    return "repeat > 1 needs fake_gige_camera = false (the camera's schedule is one pass)";
+  }
   for (const PlayerFault& f : faults) {
     if (std::string why = f.validate(); !why.empty()) return why;
   }
@@ -77,6 +81,21 @@ struct DivePlayer::Impl {
   std::unique_ptr<lcm::LCM> registration_lcm;       ///< registration_lcm_url, when set
   std::unique_ptr<CameraPlayback> camera_playback;  ///< when the camera is played
   std::vector<std::int64_t> fault_counts;           ///< messages per options.faults entry
+  /// Playback state: the last written message's (shifted) dive time and host time, the log's
+  /// realtime - monotonic offset (from the raw messages: registrations carry only a realtime
+  /// utime).
+  std::int64_t last_dive_us = 0, last_write_us = 0;
+  std::optional<std::int64_t> realtime_minus_monotonic_us;
+  /// One repetition of the log (PlayerOptions::repeat): its index and dive-time shift.
+  struct Pass {
+    int index = 0;
+    std::int64_t shift_us = 0;
+  };
+  /// Plays one event at its time (shifted by the pass), updating the report.
+  void play_registration(const navlcm::registration_t& reg, const Pass& pass, PlayReport& report,
+                         const std::atomic<bool>& stop);
+  void play_raw(navlcm::raw_bytes_t& raw, const Pass& pass, PlayReport& report,
+                const std::atomic<bool>& stop);
 
   void resolve_paths(const fs::path& dive);
   void plan_sensors(const daemon::NavdConfig& config);
@@ -265,49 +284,58 @@ void DivePlayer::write_navd_config(const fs::path& path, const std::string& lcm_
   (void)daemon::load_config_file(path.string());  // navd must accept it
 }
 
+void DivePlayer::Impl::play_registration(const navlcm::registration_t& reg, const Pass& pass,
+                                         PlayReport& report, const std::atomic<bool>& stop) {
+  if (!registration_lcm || !report.started || !realtime_minus_monotonic_us || pass.index > 0) {
+    ++report.registrations_not_played;
+    return;
+  }
+  const double at_us =
+      static_cast<double>(reg.utime - *realtime_minus_monotonic_us - report.dive_start_us);
+  daemon::sleep_until_monotonic_us(report.host_start_us + std::llround(at_us / options.speed),
+                                   stop);
+  if (stop.load()) return;
+  if (publish_registration(reg)) {
+    ++report.registrations_played;
+  } else {
+    ++report.registrations_not_played;
+  }
+}
+
+void DivePlayer::Impl::play_raw(navlcm::raw_bytes_t& raw, const Pass& pass, PlayReport& report,
+                                const std::atomic<bool>& stop) {
+  raw.host_monotonic_us += pass.shift_us;
+  if (!realtime_minus_monotonic_us) realtime_minus_monotonic_us = raw.utime - raw.host_monotonic_us;
+  if (!report.started) start_clock(raw.host_monotonic_us, report);
+  const double offset_us = static_cast<double>(raw.host_monotonic_us - report.dive_start_us);
+  const std::int64_t due_us = report.host_start_us + std::llround(offset_us / options.speed);
+  daemon::sleep_until_monotonic_us(due_us, stop);
+  if (stop.load()) return;
+  last_write_us = daemon::monotonic_us();
+  report.max_late_s = std::max(report.max_late_s, (last_write_us - due_us) * 1e-6);
+  if (last_write_us - due_us > 10'000) ++report.late_writes;
+  if (write_raw(raw, report)) last_dive_us = raw.host_monotonic_us;
+}
+
 PlayReport DivePlayer::play(const std::atomic<bool>& stop) {
   PlayReport report;
   report.sensors = impl_->sensors;
   if (impl_->options.wait_for_readers && !impl_->wait_for_readers(stop)) return report;
-  daemon::DiveLogReader reader(impl_->log_path.string());
-  const double speed = impl_->options.speed;
-  std::int64_t last_dive_us = 0, last_write_us = 0;
-  // The log's realtime - monotonic offset (from the raw messages): registrations carry only a
-  // realtime utime.
-  std::optional<std::int64_t> realtime_minus_monotonic_us;
-  while (!stop.load()) {
-    std::optional<daemon::DiveLogEvent> event = reader.next();
-    if (!event) break;
-    if (std::holds_alternative<navlcm::image_metadata_t>(*event)) ++report.images_not_played;
-    if (const auto* reg = std::get_if<navlcm::registration_t>(&*event)) {
-      if (!impl_->registration_lcm || !report.started || !realtime_minus_monotonic_us) {
-        ++report.registrations_not_played;
-        continue;
+  std::int64_t period_us = 0;  ///< dive time from one repetition to the next
+  for (int index = 0; index < impl_->options.repeat && !stop.load(); ++index) {
+    if (index == 1) period_us = impl_->last_dive_us - report.dive_start_us + 1'000'000;
+    const Impl::Pass pass{index, index * period_us};
+    daemon::DiveLogReader reader(impl_->log_path.string());
+    while (!stop.load()) {
+      std::optional<daemon::DiveLogEvent> event = reader.next();
+      if (!event) break;
+      if (std::holds_alternative<navlcm::image_metadata_t>(*event)) ++report.images_not_played;
+      if (const auto* reg = std::get_if<navlcm::registration_t>(&*event)) {
+        impl_->play_registration(*reg, pass, report, stop);
+      } else if (auto* raw = std::get_if<navlcm::raw_bytes_t>(&*event)) {
+        impl_->play_raw(*raw, pass, report, stop);
       }
-      const double at_us =
-          static_cast<double>(reg->utime - *realtime_minus_monotonic_us - report.dive_start_us);
-      daemon::sleep_until_monotonic_us(report.host_start_us + std::llround(at_us / speed), stop);
-      if (stop.load()) break;
-      if (impl_->publish_registration(*reg)) {
-        ++report.registrations_played;
-      } else {
-        ++report.registrations_not_played;
-      }
-      continue;
     }
-    const auto* raw = std::get_if<navlcm::raw_bytes_t>(&*event);
-    if (!raw) continue;
-    if (!realtime_minus_monotonic_us)
-      realtime_minus_monotonic_us = raw->utime - raw->host_monotonic_us;
-    if (!report.started) impl_->start_clock(raw->host_monotonic_us, report);
-    const double offset_us = static_cast<double>(raw->host_monotonic_us - report.dive_start_us);
-    const std::int64_t due_us = report.host_start_us + std::llround(offset_us / speed);
-    daemon::sleep_until_monotonic_us(due_us, stop);
-    if (stop.load()) break;
-    last_write_us = daemon::monotonic_us();
-    report.max_late_s = std::max(report.max_late_s, (last_write_us - due_us) * 1e-6);
-    if (last_write_us - due_us > 10'000) ++report.late_writes;
-    if (impl_->write_raw(*raw, report)) last_dive_us = raw->host_monotonic_us;
   }
   if (impl_->camera_playback && report.started) {
     report.camera = impl_->camera_playback->finish(stop);
@@ -315,8 +343,8 @@ PlayReport DivePlayer::play(const std::atomic<bool>& stop) {
   }
   report.stopped = stop.load();
   if (report.started) {
-    report.dive_span_s = (last_dive_us - report.dive_start_us) * 1e-6;
-    report.wall_s = (last_write_us - report.host_start_us) * 1e-6;
+    report.dive_span_s = (impl_->last_dive_us - report.dive_start_us) * 1e-6;
+    report.wall_s = (impl_->last_write_us - report.host_start_us) * 1e-6;
   }
   return report;
 }

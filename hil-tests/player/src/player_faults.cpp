@@ -86,8 +86,8 @@ std::optional<std::vector<std::uint8_t>> nmea_with_heading(std::span<const std::
   return to_bytes(drivers::encode_nmea(*heading));
 }
 
-std::optional<std::vector<std::uint8_t>> paro_with_depth_offset(
-    std::span<const std::uint8_t> bytes, double depth_offset_m) {
+std::optional<std::vector<std::uint8_t>> paro_with_depth_offset(std::span<const std::uint8_t> bytes,
+                                                                double depth_offset_m) {
   drivers::ParoDecoder decoder;
   std::vector<drivers::ParoRecord> records;
   decoder.feed(bytes, drivers::HostTime{}, records);

@@ -18,19 +18,19 @@ namespace nav::campaign {
 /// What is done to navd's host during the fault window.
 enum class HostFault {
   kNone,
-  kCpuSaturation,      ///< two busy-looping processes (both cores) for the window
-  kRouteRemoved,       ///< the multicast route 224.0.0.0/4 deleted (network namespace)
-  kCheckpointDiskFull, ///< checkpoint.path on a small tmpfs, filled to ENOSPC
-  kKillRestart,        ///< SIGKILL at a random moment of the window, restart with checkpoints
+  kCpuSaturation,       ///< two busy-looping processes (both cores) for the window
+  kRouteRemoved,        ///< the multicast route 224.0.0.0/4 deleted (network namespace)
+  kCheckpointDiskFull,  ///< checkpoint.path on a small tmpfs, filled to ENOSPC
+  kKillRestart,         ///< SIGKILL at a random moment of the window, restart with checkpoints
 };
 
 /// The health_t / sensor_health_t condition that counts as "health reports the fault".
 enum class Detector {
-  kSilent,      ///< the sensor's last_message_age_s > 1 s or connected == false
-  kDisconnected,///< connected == false or reconnects grew
-  kRejected,    ///< the sensor's rejected_updates or decode_errors grew, or nis_mean > 4 x
-                ///< nis_expected (innovation monitoring)
-  kNone,        ///< nothing in health is expected (host faults navd should ride through)
+  kSilent,        ///< the sensor's last_message_age_s > 1 s or connected == false
+  kDisconnected,  ///< connected == false or reconnects grew
+  kRejected,      ///< the sensor's rejected_updates or decode_errors grew, or nis_mean > 4 x
+                  ///< nis_expected (innovation monitoring)
+  kNone,          ///< nothing in health is expected (host faults navd should ride through)
 };
 
 const char* to_string(HostFault fault);

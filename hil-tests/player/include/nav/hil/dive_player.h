@@ -67,6 +67,10 @@ struct PlayerOptions {
   std::string registration_lcm_url;
   /// Channel they are published on (navd's lcm.channels.registration by default).
   std::string registration_channel = "NAV_REGISTRATION";
+  /// The log is played this many times back to back (a soak), pass k shifted in dive time by
+  /// k x (the first pass's span + 1 s); registrations play in the first pass only; > 1 needs
+  /// fake_gige_camera = false.
+  int repeat = 1;
   /// Sensor faults injected into the played bytes (player_faults.h); empty: none.
   std::vector<PlayerFault> faults;
 

@@ -59,8 +59,8 @@ std::optional<std::vector<std::uint8_t>> nmea_with_heading(std::span<const std::
 
 /// A Paroscientific psia reply reading `depth_offset_m` deeper (negative: shallower);
 /// nullopt when the bytes are not one such reply.
-std::optional<std::vector<std::uint8_t>> paro_with_depth_offset(
-    std::span<const std::uint8_t> bytes, double depth_offset_m);
+std::optional<std::vector<std::uint8_t>> paro_with_depth_offset(std::span<const std::uint8_t> bytes,
+                                                                double depth_offset_m);
 
 /// What the player does with one message of a sensor under `fault` (not kUnplug, which the
 /// player handles with the pty itself). `count` numbers the fault's messages from 0 (depth
