@@ -32,6 +32,9 @@ std::string fmt(const char* format, double value) {
   return text;
 }
 
+/// A window's mean NEES, "-" for a window without solutions (-1).
+std::string nees(double value) { return value < 0.0 ? "-" : fmt("%.2f", value); }
+
 void write_text(const fs::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::trunc);
   out << text;
@@ -51,6 +54,8 @@ void judge(const FaultScenario& scenario, ScenarioResult& r) {
                                   : "reported after " + fmt("%.1f", r.detected_after_s) + " s");
   }
   if (r.solutions == 0) fail("no solution heard");
+  if (r.nees_during < 0.0) fail("no solution during the fault");
+  if (r.nees_after < 0.0) fail("no solution after the fault");
   if (!(r.nees_during <= kNeesBound)) fail("NEES during " + fmt("%.1f", r.nees_during));
   if (!(r.nees_after <= kNeesBound)) fail("NEES after " + fmt("%.1f", r.nees_after));
   if (scenario.uncertainty_must_grow && !(r.sigma_xy_end_m > r.sigma_xy_start_m)) {
@@ -102,8 +107,8 @@ std::string campaign_markdown(const std::vector<ScenarioResult>& results) {
         r.detected_after_s < 0.0 ? "-"
                                  : fmt("%.1f", r.detected_after_s) + ", `" + r.detected_by + "`";
     md += "| " + r.name + ": " + r.description + " | " + detected + " | " +
-          fmt("%.3f", r.max_xy_error_m) + " | " + fmt("%.2f", r.nees_before) + " / " +
-          fmt("%.2f", r.nees_during) + " / " + fmt("%.2f", r.nees_after) + " | " +
+          fmt("%.3f", r.max_xy_error_m) + " | " + nees(r.nees_before) + " / " +
+          nees(r.nees_during) + " / " + nees(r.nees_after) + " | " +
           fmt("%.3f", r.sigma_xy_start_m) + " -> " + fmt("%.3f", r.sigma_xy_end_m) + " | " +
           (r.map_xy_rms_m < 0.0 ? std::string("-") : fmt("%.3f", r.map_xy_rms_m)) + " | " +
           std::to_string(r.delayed_states_lost) + " | " +

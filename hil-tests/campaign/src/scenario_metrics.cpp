@@ -69,8 +69,9 @@ std::string detector_field(Detector d, const navlcm::sensor_health_t& now,
   return text;
 }
 
+/// The mean, -1 for no samples (a window without solutions).
 double mean(const std::vector<double>& v) {
-  if (v.empty()) return 0.0;
+  if (v.empty()) return -1.0;
   double sum = 0.0;
   for (double x : v) sum += x;
   return sum / static_cast<double>(v.size());
@@ -176,6 +177,22 @@ void write_health_csv(const Recording& rec, const std::filesystem::path& path) {
     out << "\n";
   }
   if (!out) throw std::runtime_error(path.string() + ": cannot write the health CSV");
+}
+
+void write_solutions_csv(const Recording& rec, const TruthTrack& truth, const TimeMap& map,
+                         const std::filesystem::path& path) {
+  std::ofstream out(path, std::ios::trunc);
+  out << "dive_s,x_m,y_m,truth_x_m,truth_y_m,xy_error_m,sigma_xy_m,nees_xy,delayed_states,"
+         "filter_status\n";
+  for (const navlcm::nav_solution_t& s : rec.solutions) {
+    const double t_s = map.dive_s(s.time_of_validity_us);
+    const auto xy = truth.xy_at(map.dive_start_us + t_s * 1e6);
+    const XyCheck c = check_xy(s, xy);
+    out << t_s << "," << s.p_world_m[0] << "," << s.p_world_m[1] << "," << xy.first << ","
+        << xy.second << "," << c.error_m << "," << c.sigma_m << "," << c.nees << ","
+        << s.num_delayed_states << "," << int{s.filter_status} << "\n";
+  }
+  if (!out) throw std::runtime_error(path.string() + ": cannot write the solutions CSV");
 }
 
 double map_xy_rms_m(const Recording& rec, const TruthTrack& truth, const TimeMap& map) {

@@ -61,6 +61,11 @@ void fill_detection(const Recording& rec, std::int64_t fault_realtime_us,
 /// nis_mean), the evidence behind detected_after_s. Throws std::runtime_error naming `path`.
 void write_health_csv(const Recording& rec, const std::filesystem::path& path);
 
+/// The solutions against the truth as CSV (dive_s, x_m, y_m, truth_x_m, truth_y_m, xy_error_m,
+/// sigma_xy_m, nees_xy, delayed_states, filter_status): the evidence behind the NEES columns.
+void write_solutions_csv(const Recording& rec, const TruthTrack& truth, const TimeMap& map,
+                         const std::filesystem::path& path);
+
 /// RMS horizontal error of the snapshot's delayed-state means against the truth at their image
 /// times; -1 without a snapshot or states.
 double map_xy_rms_m(const Recording& rec, const TruthTrack& truth, const TimeMap& map);

@@ -249,6 +249,7 @@ ScenarioResult run_scenario(const FaultScenario& scenario, const ScenarioSetup& 
   }
   const TruthTrack truth(setup.dive_dir / "truth.csv");
   fill_track_metrics(rec, truth, map, scenario, out);
+  write_solutions_csv(rec, truth, map, dir / "solutions.csv");
   fill_detection(rec, fault_realtime_us, scenario, out);
   out.map_xy_rms_m = map_xy_rms_m(rec, truth, map);
   judge(scenario, out);

@@ -11,7 +11,8 @@
 //   max_xy_error_m     worst horizontal error of NAVD_SOLUTION from the fault to the dive's end
 //                      (time of validity mapped to dive time with the player's mapping);
 //   nees_*             mean horizontal NEES e' P_xy^-1 e of the published solutions (2 DOF,
-//                      expected 2) before / during / after the fault window;
+//                      expected 2) before / during / after the fault window (-1: no
+//                      solution in that window);
 //   sigma_xy_*_m       sqrt(trace P_xy) published at the window's start and end;
 //   delayed_states_lost  kill_restart: delayed states of the last solution before SIGKILL
 //                      minus those of the first after the restart (the checkpoint's age);
