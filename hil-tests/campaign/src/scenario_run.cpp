@@ -141,19 +141,116 @@ struct HostAction {
 
 }  // namespace
 
+namespace {
+
+/// navd with its arguments, restartable (kill_restart).
+struct Navd {
+  const ScenarioSetup& setup;
+  std::vector<std::string> args;
+  std::filesystem::path dir;
+  pid_t pid = -1;
+  void start() {
+    pid = spawn_logged(setup.navd_path, args, dir);
+    if (pid <= 0)
+      throw std::runtime_error("fault campaign: cannot start " + setup.navd_path.string());
+  }
+  /// Running now? Then SIGTERM and its exit code into `out`.
+  void stop(ScenarioResult& out) const {
+    bool alive = false;
+    (void)wait_exit_ms(pid, 0, &alive);
+    out.navd_alive = alive;
+    if (alive) ::kill(pid, SIGTERM);
+    out.navd_exit_code = alive ? wait_exit_ms(pid, 5000) : -1;
+  }
+};
+
+/// The fault's window on the dive's clock: the host action's start and end, the kill.
+struct Timeline {
+  const FaultScenario& scenario;
+  HostAction& action;
+  Navd& navd;
+  Listener& listener;
+  double kill_s = 0.0;
+  bool started = false, ended = false, killed = false;
+  std::int64_t fault_realtime_us = 0, end_realtime_us = 0, restart_realtime_us = 0;
+  int states_before_kill = -1;
+
+  void tick(double now_s) {
+    if (!started && now_s >= scenario.from_s) {
+      started = true;
+      fault_realtime_us = daemon::realtime_us();
+      action.start();
+    }
+    if (scenario.host == HostFault::kKillRestart && !killed && now_s >= kill_s) kill_and_restart();
+    if (started && !ended && now_s >= scenario.to_s) {
+      ended = true;
+      end_realtime_us = daemon::realtime_us();
+      action.end();
+    }
+  }
+  void kill_and_restart() {
+    killed = true;
+    states_before_kill = listener.delayed_states_before(daemon::realtime_us());
+    ::kill(navd.pid, SIGKILL);
+    (void)wait_exit_ms(navd.pid, 2000);
+    restart_realtime_us = daemon::realtime_us();
+    navd.start();
+    action.note("SIGKILL at dive " + std::to_string(kill_s).substr(0, 5) + " s, restarted");
+  }
+  /// After the run: delayed states lost, when the route's solutions came back.
+  void conclude(ScenarioResult& out) {
+    if (!ended) action.end();
+    if (killed) {
+      const int after = listener.delayed_states_after(restart_realtime_us);
+      out.delayed_states_lost =
+          after < 0 ? states_before_kill : std::max(0, states_before_kill - after);
+      action.note("delayed states " + std::to_string(states_before_kill) + " before the kill, " +
+                  std::to_string(after) + " at the first solution after the restart");
+    }
+    if (scenario.host == HostFault::kRouteRemoved && end_realtime_us > 0) {
+      const std::int64_t back = listener.first_solution_after(end_realtime_us);
+      action.note(back > 0 ? "solutions heard again " +
+                                 std::to_string((back - end_realtime_us) * 1e-6).substr(0, 4) +
+                                 " s after the route came back"
+                           : "no solution heard after the route came back");
+    }
+  }
+};
+
+/// A clean scenario directory (its checkpoints on a small tmpfs for the disk-full fault).
+fs::path prepare_dir(const FaultScenario& scenario, const ScenarioSetup& setup,
+                     std::string& notes) {
+  const fs::path dir = setup.out_dir / "scenarios" / scenario.name;
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+  fs::create_directories(dir / "checkpoints");
+  if (scenario.host == HostFault::kCheckpointDiskFull) {
+    notes = mount_small_tmpfs(dir / "checkpoints", 4096);
+  }
+  return dir;
+}
+
+/// The measurements from the recording, the CSVs, the verdict.
+void measure(const FaultScenario& scenario, const ScenarioSetup& setup, const fs::path& dir,
+             const TimeMap& map, std::int64_t fault_realtime_us, const Recording& rec,
+             ScenarioResult& out) {
+  write_health_csv(rec, dir / "health.csv");
+  const TruthTrack truth(setup.dive_dir / "truth.csv");
+  fill_track_metrics(rec, truth, map, scenario, out);
+  write_solutions_csv(rec, truth, map, dir / "solutions.csv");
+  fill_detection(rec, fault_realtime_us, scenario, out);
+  out.map_xy_rms_m = map_xy_rms_m(rec, truth, map);
+  judge(scenario, out);
+}
+
+}  // namespace
+
 ScenarioResult run_scenario(const FaultScenario& scenario, const ScenarioSetup& setup) {
   ScenarioResult out;
   out.name = scenario.name;
   out.description = scenario.description;
-  const fs::path dir = setup.out_dir / "scenarios" / scenario.name;
+  const fs::path dir = prepare_dir(scenario, setup, out.notes);
   const fs::path checkpoints = dir / "checkpoints";
-  std::error_code ec;
-  fs::remove_all(dir, ec);
-  fs::create_directories(checkpoints);
-  if (scenario.host == HostFault::kCheckpointDiskFull) {
-    if (std::string e = mount_small_tmpfs(checkpoints, 4096); !e.empty()) out.notes = e;
-  }
-
   hil::PlayerOptions po;
   po.serial_dir = dir / "tty";
   po.reader_timeout = std::chrono::seconds(30);
@@ -170,89 +267,40 @@ ScenarioResult run_scenario(const FaultScenario& scenario, const ScenarioSetup& 
   };
   hil::DivePlayer player(setup.dive_dir, po);
   write_config(player, dir / "navd.yaml", setup.lcm_url, checkpoints);
-  const std::vector<std::string> args{"--config", (dir / "navd.yaml").string(), "--checkpoints"};
 
   Listener listener(setup.lcm_url);
-  pid_t navd = spawn_logged(setup.navd_path, args, dir);
-  if (navd <= 0)
-    throw std::runtime_error("fault campaign: cannot start " + setup.navd_path.string());
+  Navd navd{setup, {"--config", (dir / "navd.yaml").string(), "--checkpoints"}, dir};
+  navd.start();
   std::atomic<bool> stop_play{false}, played{false};
   hil::PlayReport report;
   std::thread play([&] {
     report = player.play(stop_play);
     played.store(true);
   });
-
   HostAction action{scenario, dir, checkpoints, {}, out.notes};
+  Timeline timeline{scenario, action, navd, listener};
   std::mt19937_64 rng(setup.seed);
-  const double kill_s = scenario.from_s + std::uniform_real_distribution<double>(0.0, 1.0)(rng) *
-                                              (scenario.to_s - scenario.from_s);
-  bool started = false, ended = false, killed = false;
-  std::int64_t fault_realtime_us = 0, end_realtime_us = 0, restart_realtime_us = 0;
-  int states_before_kill = -1;
+  timeline.kill_s = scenario.from_s + std::uniform_real_distribution<double>(0.0, 1.0)(rng) *
+                                          (scenario.to_s - scenario.from_s);
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(setup.give_up_s);
   while (!played.load() && std::chrono::steady_clock::now() < give_up) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    if (!mapped.load()) continue;
-    const double now_s = map.dive_s(daemon::monotonic_us());
-    if (!started && now_s >= scenario.from_s) {
-      started = true;
-      fault_realtime_us = daemon::realtime_us();
-      action.start();
-    }
-    if (scenario.host == HostFault::kKillRestart && !killed && now_s >= kill_s) {
-      killed = true;
-      states_before_kill = listener.delayed_states_before(daemon::realtime_us());
-      ::kill(navd, SIGKILL);
-      (void)wait_exit_ms(navd, 2000);
-      restart_realtime_us = daemon::realtime_us();
-      navd = spawn_logged(setup.navd_path, args, dir);
-      action.note("SIGKILL at dive " + std::to_string(kill_s).substr(0, 5) + " s, restarted");
-    }
-    if (started && !ended && now_s >= scenario.to_s) {
-      ended = true;
-      end_realtime_us = daemon::realtime_us();
-      action.end();
-    }
+    if (mapped.load()) timeline.tick(map.dive_s(daemon::monotonic_us()));
   }
-  if (!ended) action.end();
   stop_play.store(true);
   play.join();
   std::this_thread::sleep_for(std::chrono::seconds(2));  // navd's last solutions and health
-  bool alive = false;
-  (void)wait_exit_ms(navd, 0, &alive);
-  out.navd_alive = alive;
-  if (alive) ::kill(navd, SIGTERM);
-  out.navd_exit_code = alive ? wait_exit_ms(navd, 5000) : -1;
-  if (killed) {
-    const int after = listener.delayed_states_after(restart_realtime_us);
-    out.delayed_states_lost =
-        after < 0 ? states_before_kill : std::max(0, states_before_kill - after);
-    action.note("delayed states " + std::to_string(states_before_kill) + " before the kill, " +
-                std::to_string(after) + " at the first solution after the restart");
-  }
-  if (scenario.host == HostFault::kRouteRemoved && end_realtime_us > 0) {
-    const std::int64_t back = listener.first_solution_after(end_realtime_us);
-    action.note(back > 0 ? "solutions heard again " +
-                               std::to_string((back - end_realtime_us) * 1e-6).substr(0, 4) +
-                               " s after the route came back"
-                         : "no solution heard after the route came back");
-  }
+  navd.stop(out);
+  timeline.conclude(out);
   if (scenario.host == HostFault::kCheckpointDiskFull) action.note(unmount(checkpoints));
-  Recording rec = listener.take();
-  write_health_csv(rec, dir / "health.csv");
+  const Recording rec = listener.take();
   out.player_max_late_s = report.max_late_s;
   out.notes = action.notes;
   if (!report.started) {
     out.reason = "navd never opened the played devices";
     return out;
   }
-  const TruthTrack truth(setup.dive_dir / "truth.csv");
-  fill_track_metrics(rec, truth, map, scenario, out);
-  write_solutions_csv(rec, truth, map, dir / "solutions.csv");
-  fill_detection(rec, fault_realtime_us, scenario, out);
-  out.map_xy_rms_m = map_xy_rms_m(rec, truth, map);
-  judge(scenario, out);
+  measure(scenario, setup, dir, map, timeline.fault_realtime_us, rec, out);
   return out;
 }
 
