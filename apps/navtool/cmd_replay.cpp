@@ -6,7 +6,8 @@
 // logdet.csv). Recovery: the configured fixed PCG iterations at each image, synchronously or
 // on NavFilter's recovery thread (filter.recovery_thread) taken at data times (nav_filter.h),
 // so the output does not depend on timing. Default config:
-// DIVE/config.yaml.
+// DIVE/config.yaml. --vision: navd registers the dive's rendered frames itself (vision.enabled,
+// nav/daemon/vision/vision_link.h) instead of reading the log's registrations.
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -27,7 +28,11 @@ struct ReplayArgs {
   bool as_fast_as_possible = false;
   std::string out_dir;
   bool json = false;
+  bool vision = false;
 };
+
+/// --vision with a config whose pairs do not wait long enough: wait one sim.yaml image period.
+constexpr double kVisionWaitS = 8.0;
 
 void run_replay_command(const ReplayArgs& args) {
   namespace fs = std::filesystem;
@@ -39,7 +44,15 @@ void run_replay_command(const ReplayArgs& args) {
                                                         : fs::path(args.config_path);
   if (!fs::exists(log)) throw CommandError("replay: no dive log at " + log.string());
   try {
-    const daemon::NavdConfig config = daemon::load_config_file(config_path.string());
+    daemon::NavdConfig config = daemon::load_config_file(config_path.string());
+    if (args.vision) {
+      config.vision.enabled = true;
+      // A dive log's config replays complete tables (registration_wait_s 0); the vision stage
+      // answers at data time image + answer_delay_s, so pairs must wait past that.
+      if (config.filter.registration_wait_s <= config.vision.answer_delay_s) {
+        config.filter.registration_wait_s = kVisionWaitS;
+      }
+    }
     daemon::ReplayOptions options;
     options.speed = args.speed;
     options.as_fast_as_possible = args.as_fast_as_possible;
@@ -81,6 +94,11 @@ void add_replay(CLI::App& app) {
   cmd->add_flag("--as-fast-as-possible", args->as_fast_as_possible, "no pacing")->excludes(speed);
   cmd->add_option("--out", args->out_dir, "write the replay output directory here");
   cmd->add_flag("--json", args->json, "summary on stdout (else on stderr)");
+  cmd->add_flag("--vision", args->vision,
+                "register the dive's frames (DIVE/images, navtool simulate --render-images) with "
+                "navd's vision stage instead of reading the log's registrations (config "
+                "vision.enabled; filter.registration_wait_s raised to 8 s if not above "
+                "vision.answer_delay_s); deterministic");
   cmd->callback([args] { run_replay_command(*args); });
 }
 
