@@ -9,6 +9,7 @@
 // DIVE/config.yaml. --vision: navd registers the dive's rendered frames itself (vision.enabled,
 // nav/daemon/vision/vision_link.h) instead of reading the log's registrations.
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -30,6 +31,33 @@ struct ReplayArgs {
   bool json = false;
   bool vision = false;
 };
+
+/// vision_answers.csv: every answer of navd's vision stage applied in the replay, in proposal
+/// order: frame_i, frame_j, success, applied_us (data time), z0..z4 (CameraRelativePoseModel
+/// order), c00..c44 (5x5 covariance row-major), reason (quoted; "" on success).
+void write_vision_answers(const daemon::ReplayRun& run, const std::filesystem::path& path) {
+  std::ofstream out(path);
+  out << "frame_i,frame_j,success,applied_us";
+  for (int k = 0; k < 5; ++k) out << ",z" << k;
+  for (int r = 0; r < 5; ++r)
+    for (int c = 0; c < 5; ++c) out << ",c" << r << c;
+  out << ",reason\n";
+  out.precision(17);
+  for (const daemon::vision::AppliedAnswer& a : run.vision_answers) {
+    const core::Registration& g = a.registration;
+    out << g.frame_id_i << ',' << g.frame_id_j << ',' << (g.success ? 1 : 0) << ','
+        << g.available_us;
+    for (int k = 0; k < 5; ++k) out << ',' << g.z(k);
+    for (int r = 0; r < 5; ++r)
+      for (int c = 0; c < 5; ++c) out << ',' << g.covariance(r, c);
+    std::string reason = a.reason;
+    for (char& ch : reason) {
+      if (ch == '"') ch = '\'';
+    }
+    out << ",\"" << reason << "\"\n";
+  }
+  if (!out) throw CommandError("replay: cannot write " + path.string());
+}
 
 /// --vision with a config whose pairs do not wait long enough: wait one sim.yaml image period.
 constexpr double kVisionWaitS = 8.0;
@@ -60,7 +88,10 @@ void run_replay_command(const ReplayArgs& args) {
     const daemon::ReplayAnalysis analysis = daemon::analyse(*run.slam);
     const std::string summary =
         daemon::replay_summary_json(run, analysis, dive_dir.string(), config_path.string());
-    if (!args.out_dir.empty()) daemon::write_replay_outputs(run, analysis, summary, args.out_dir);
+    if (!args.out_dir.empty()) {
+      daemon::write_replay_outputs(run, analysis, summary, args.out_dir);
+      if (run.vision) write_vision_answers(run, fs::path(args.out_dir) / "vision_answers.csv");
+    }
     if (args.json) {
       std::cout << summary << std::endl;
     } else {

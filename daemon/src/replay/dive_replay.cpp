@@ -171,7 +171,10 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
     if (run.error.empty() && !twin_error.empty()) run.error = twin_error;
   }
   run.wall_s = seconds_since(start);
-  if (vision) run.vision = vision->stats();
+  if (vision) {
+    run.vision = vision->stats();
+    run.vision_answers = vision->applied();
+  }
   run.ordering = ordering.stats();
   run.log_span_s =
       1e-6 * static_cast<double>(run.source.last_monotonic_us - run.source.first_monotonic_us);

@@ -144,6 +144,7 @@ void VisionLink::before_measurement(std::int64_t host_realtime_us,
     outstanding_.erase(outstanding_.begin());
     core::Registration reg = done.answer->registration;
     reg.available_us = done.due_realtime_us;
+    applied_.push_back(AppliedAnswer{reg, done.answer->reason});
     try {
       table.insert(reg);
     } catch (const std::invalid_argument& e) {

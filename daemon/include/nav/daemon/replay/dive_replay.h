@@ -78,6 +78,7 @@ struct ReplayRun {
   /// vision.enabled: navd registered the frames itself (vision/vision_link.h) instead of
   /// reading the log's registrations; its counters at the end.
   std::optional<vision::VisionLinkStats> vision;
+  std::vector<vision::AppliedAnswer> vision_answers;  ///< every answer applied, in order
 };
 
 /// Plays `log_path` through the filters. Throws DiveLogError / ConfigError / invalid_argument

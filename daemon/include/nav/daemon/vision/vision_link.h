@@ -21,6 +21,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "nav/core/navigation/nav_filter.h"
 #include "nav/core/navigation/registration_table.h"
@@ -29,6 +30,12 @@
 #include "nav/daemon/vision/vision_worker.h"
 
 namespace nav::daemon::vision {
+
+/// One answer applied in replay (vision_answers.csv of navtool replay --vision --out).
+struct AppliedAnswer {
+  core::Registration registration;  ///< available_us = the data time it was applied at
+  std::string reason;               ///< why success == false
+};
 
 struct VisionLinkStats {
   VisionWorkerCounters worker;
@@ -58,6 +65,8 @@ class VisionLink {
   /// Replay, filter thread, before filtering a measurement received at host_realtime_us.
   void before_measurement(std::int64_t host_realtime_us, core::RegistrationTable& table);
   VisionLinkStats stats() const;
+  /// Replay: every answer inserted into the table so far, in proposal order.
+  const std::vector<AppliedAnswer>& applied() const { return applied_; }
 
  private:
   struct Outstanding {
@@ -78,6 +87,7 @@ class VisionLink {
   mutable std::mutex mutex_;
   std::condition_variable answered_;
   std::map<std::uint64_t, Outstanding> outstanding_;  ///< replay: by sequence
+  std::vector<AppliedAnswer> applied_;                ///< replay, filter thread only
   std::unique_ptr<VisionWorker> worker_;              ///< last: stopped first
 };
 
