@@ -6,7 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <chrono>
 #include <fstream>
+#include <mutex>
+#include <thread>
+#include <vector>
 #include <opencv2/imgcodecs.hpp>
 
 #include "nav/daemon/config/config.h"
@@ -43,8 +47,7 @@ daemon::NavdConfig vision_config(const fs::path& image_dir = {}) {
   return c;
 }
 
-daemon::ReplayRun replay(const daemon::NavdConfig& config) {
-  daemon::ReplayOptions o;
+daemon::ReplayRun replay(const daemon::NavdConfig& config, daemon::ReplayOptions o = {}) {
   o.dead_reckoning = false;
   return daemon::run_replay((dive() / "dive.lcmlog").string(), config, o);
 }
@@ -95,6 +98,41 @@ TEST(SimVisionReplay, BadFramesFailTheirPairsAndTheFilterNavigatesOn) {
     if (bad) {
       EXPECT_NE(l.outcome, daemon::LinkOutcome::kAccepted) << l.frame_i << "-" << l.frame_j;
     }
+  }
+}
+
+TEST(SimVisionReplay, LiveLinkAnswersEveryProposalPastItsDeadlineAsExpired) {
+  // The live link (kLive) sees the same deferred pairs; their deadlines are on the log's
+  // CLOCK_REALTIME, long past by now, so each is answered "expired: deadline passed" without
+  // work, with its pose prior built from the filter (no "without prior").
+  const fs::path empty = scratch_dir("vision_no_frames");
+  std::mutex mutex;
+  std::vector<daemon::vision::VisionAnswer> answers;
+  daemon::vision::VisionLink live(vision_config(), (dive() / "images").string(),
+                                  daemon::vision::VisionLink::Mode::kLive,
+                                  [&](daemon::vision::VisionAnswer&& a) {
+                                    const std::lock_guard<std::mutex> lock(mutex);
+                                    answers.push_back(std::move(a));
+                                  });
+  daemon::ReplayOptions o;
+  o.after_measurement = [&](const daemon::NavFilter& f) { live.after_measurement(f); };
+  const daemon::ReplayRun run = replay(vision_config(empty), o);  // replay link: no frames
+  ASSERT_TRUE(run.error.empty()) << run.error;
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (live.stats().worker.answered < live.stats().worker.submitted &&
+         std::chrono::steady_clock::now() < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  const daemon::vision::VisionLinkStats s = live.stats();
+  EXPECT_GT(s.worker.submitted, 0u);
+  EXPECT_EQ(s.worker.submitted, run.vision->worker.submitted) << "same pairs as the replay link";
+  EXPECT_EQ(s.without_prior, 0u);
+  const std::lock_guard<std::mutex> lock(mutex);
+  ASSERT_EQ(answers.size(), s.worker.submitted);
+  for (const auto& a : answers) {
+    EXPECT_FALSE(a.registration.success);
+    EXPECT_TRUE(a.expired);
+    EXPECT_EQ(a.reason.rfind("expired: deadline passed", 0), 0u) << a.reason;
   }
 }
 
