@@ -6,8 +6,10 @@
 // logdet.csv). Recovery: the configured fixed PCG iterations at each image, synchronously or
 // on NavFilter's recovery thread (filter.recovery_thread) taken at data times (nav_filter.h),
 // so the output does not depend on timing. Default config:
-// DIVE/config.yaml.
+// DIVE/config.yaml. --vision: navd registers the dive's rendered frames itself (vision.enabled,
+// nav/daemon/vision/vision_link.h) instead of reading the log's registrations.
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -27,7 +29,38 @@ struct ReplayArgs {
   bool as_fast_as_possible = false;
   std::string out_dir;
   bool json = false;
+  bool vision = false;
 };
+
+/// vision_answers.csv: every answer of navd's vision stage applied in the replay, in proposal
+/// order: frame_i, frame_j, success, applied_us (data time), z0..z4 (CameraRelativePoseModel
+/// order), c00..c44 (5x5 covariance row-major), reason (quoted; "" on success).
+void write_vision_answers(const daemon::ReplayRun& run, const std::filesystem::path& path) {
+  std::ofstream out(path);
+  out << "frame_i,frame_j,success,applied_us";
+  for (int k = 0; k < 5; ++k) out << ",z" << k;
+  for (int r = 0; r < 5; ++r)
+    for (int c = 0; c < 5; ++c) out << ",c" << r << c;
+  out << ",reason\n";
+  out.precision(17);
+  for (const daemon::vision::AppliedAnswer& a : run.vision_answers) {
+    const core::Registration& g = a.registration;
+    out << g.frame_id_i << ',' << g.frame_id_j << ',' << (g.success ? 1 : 0) << ','
+        << g.available_us;
+    for (int k = 0; k < 5; ++k) out << ',' << g.z(k);
+    for (int r = 0; r < 5; ++r)
+      for (int c = 0; c < 5; ++c) out << ',' << g.covariance(r, c);
+    std::string reason = a.reason;
+    for (char& ch : reason) {
+      if (ch == '"') ch = '\'';
+    }
+    out << ",\"" << reason << "\"\n";
+  }
+  if (!out) throw CommandError("replay: cannot write " + path.string());
+}
+
+/// --vision with a config whose pairs do not wait long enough: wait one sim.yaml image period.
+constexpr double kVisionWaitS = 8.0;
 
 void run_replay_command(const ReplayArgs& args) {
   namespace fs = std::filesystem;
@@ -39,7 +72,15 @@ void run_replay_command(const ReplayArgs& args) {
                                                         : fs::path(args.config_path);
   if (!fs::exists(log)) throw CommandError("replay: no dive log at " + log.string());
   try {
-    const daemon::NavdConfig config = daemon::load_config_file(config_path.string());
+    daemon::NavdConfig config = daemon::load_config_file(config_path.string());
+    if (args.vision) {
+      config.vision.enabled = true;
+      // A dive log's config replays complete tables (registration_wait_s 0); the vision stage
+      // answers at data time image + answer_delay_s, so pairs must wait past that.
+      if (config.filter.registration_wait_s <= config.vision.answer_delay_s) {
+        config.filter.registration_wait_s = kVisionWaitS;
+      }
+    }
     daemon::ReplayOptions options;
     options.speed = args.speed;
     options.as_fast_as_possible = args.as_fast_as_possible;
@@ -47,7 +88,10 @@ void run_replay_command(const ReplayArgs& args) {
     const daemon::ReplayAnalysis analysis = daemon::analyse(*run.slam);
     const std::string summary =
         daemon::replay_summary_json(run, analysis, dive_dir.string(), config_path.string());
-    if (!args.out_dir.empty()) daemon::write_replay_outputs(run, analysis, summary, args.out_dir);
+    if (!args.out_dir.empty()) {
+      daemon::write_replay_outputs(run, analysis, summary, args.out_dir);
+      if (run.vision) write_vision_answers(run, fs::path(args.out_dir) / "vision_answers.csv");
+    }
     if (args.json) {
       std::cout << summary << std::endl;
     } else {
@@ -81,6 +125,11 @@ void add_replay(CLI::App& app) {
   cmd->add_flag("--as-fast-as-possible", args->as_fast_as_possible, "no pacing")->excludes(speed);
   cmd->add_option("--out", args->out_dir, "write the replay output directory here");
   cmd->add_flag("--json", args->json, "summary on stdout (else on stderr)");
+  cmd->add_flag("--vision", args->vision,
+                "register the dive's frames (DIVE/images, navtool simulate --render-images) with "
+                "navd's vision stage instead of reading the log's registrations (config "
+                "vision.enabled; filter.registration_wait_s raised to 8 s if not above "
+                "vision.answer_delay_s); deterministic");
   cmd->callback([args] { run_replay_command(*args); });
 }
 

@@ -102,6 +102,24 @@ SimDiveConfig parse_sim(const YamlReader& c) {
   return sim;
 }
 
+VisionConfig parse_vision(const YamlReader& v) {
+  v.expect_map({"enabled", "threads", "cache_images", "queue_capacity", "answer_delay_s",
+                "image_dir", "image_width_px", "image_height_px", "depth_sigma_fraction",
+                "depth_sigma_floor_m"});
+  VisionConfig vision;
+  if (v.has("enabled")) vision.enabled = v.at("enabled").as_bool();
+  v.read("threads", vision.threads, 1, 64);
+  v.read("cache_images", vision.cache_images, 2, 100000);
+  v.read("queue_capacity", vision.queue_capacity, 1, 100000);
+  v.read("answer_delay_s", vision.answer_delay_s, 0.0, 3600.0);
+  v.read("image_dir", vision.image_dir);
+  v.read("image_width_px", vision.image_width_px, 0, 100000);
+  v.read("image_height_px", vision.image_height_px, 0, 100000);
+  v.read("depth_sigma_fraction", vision.depth_sigma_fraction, 0.0, 10.0);
+  v.read("depth_sigma_floor_m", vision.depth_sigma_floor_m, 0.0, 1000.0);
+  return vision;
+}
+
 }  // namespace
 
 ConfigError::ConfigError(const std::string& source, std::string key_path, std::string reason)
@@ -148,13 +166,14 @@ NavdConfig parse_config(const std::string& yaml_text, const std::string& source,
                           std::to_string(e.mark.column + 1) + ": " + e.msg);
   }
   const YamlReader doc(root, "", &source);
-  doc.expect_map({"sensors", "filter", "lcm", "checkpoint", "sim"});
+  doc.expect_map({"sensors", "filter", "lcm", "checkpoint", "sim", "vision"});
   NavdConfig config;
   config.sensors = detail::parse_sensors(doc.at("sensors"), base_dir);
   if (doc.has("filter")) config.filter = parse_filter(doc.at("filter"));
   if (doc.has("lcm")) config.lcm = parse_lcm(doc.at("lcm"));
   if (doc.has("checkpoint")) config.checkpoint = parse_checkpoint(doc.at("checkpoint"));
   if (doc.has("sim")) config.sim = parse_sim(doc.at("sim"));
+  if (doc.has("vision")) config.vision = parse_vision(doc.at("vision"));
   return config;
 }
 

@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <filesystem>
 #include <optional>
 #include <thread>
 
@@ -31,14 +32,16 @@ struct Checkpointing {
 /// (run.error set for the SLAM filter; the twin's message comes from FilterWorker::finish()).
 bool filter_one(ReplayRun& run, const Measurement& m,
                 const std::function<void(const NavFilter&)>& after, Checkpointing& ckpt,
-                FilterWorker* twin) {
+                FilterWorker* twin, vision::VisionLink* vision) {
   const bool held = ckpt.skipper && ckpt.skipper->skip(m);
   if (!held) {
+    if (vision) vision->before_measurement(time_of(m).host_realtime_us, *run.registrations);
     if (core::Status s = run.slam->process(m); !s.ok()) {
       run.error = "SLAM filter at t = " + std::to_string(validity_us(m)) + " us: " + s.to_string();
       return false;
     }
     if (ckpt.checkpointer) ckpt.checkpointer->after_measurement(*run.slam, m);
+    if (vision) vision->after_measurement(*run.slam);
     if (after) after(*run.slam);
   }
   if (twin) {
@@ -48,13 +51,32 @@ bool filter_one(ReplayRun& run, const Measurement& m,
   return true;
 }
 
+/// vision.enabled: navd's own vision stage on the dive's frames (vision/vision_link.h).
+std::unique_ptr<vision::VisionLink> make_vision(const std::string& log_path,
+                                                const NavdConfig& config) {
+  if (!config.vision.enabled) return nullptr;
+  if (!(config.filter.registration_wait_s > config.vision.answer_delay_s)) {
+    throw std::invalid_argument(
+        "vision: filter.registration_wait_s (" + std::to_string(config.filter.registration_wait_s) +
+        " s) must exceed vision.answer_delay_s (" + std::to_string(config.vision.answer_delay_s) +
+        " s), else every proposed pair expires before its answer");
+  }
+  const std::string dir =
+      config.vision.image_dir.empty()
+          ? (std::filesystem::path(log_path).parent_path() / "images").string()
+          : config.vision.image_dir;
+  return std::make_unique<vision::VisionLink>(config, dir, vision::VisionLink::Mode::kReplay);
+}
+
 }  // namespace
 
 ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
                      const ReplayOptions& options) {
   ReplayRun run;
   run.log_path = log_path;
-  run.registrations = std::make_unique<RegistrationTable>(load_registrations(log_path));
+  std::unique_ptr<vision::VisionLink> vision = make_vision(log_path, config);
+  run.registrations = vision ? std::make_unique<RegistrationTable>()
+                             : std::make_unique<RegistrationTable>(load_registrations(log_path));
   const NavFilterOptions filter_options = filter_options_from_config(config);
   run.slam = std::make_unique<NavFilter>(filter_options, run.registrations.get());
   if (options.dead_reckoning) {
@@ -126,7 +148,7 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
     while (ok) {
       std::optional<Measurement> m = ordering.pop_ready();
       if (!m) break;
-      ok = filter_one(run, *m, options.after_measurement, ckpt, twin.get());
+      ok = filter_one(run, *m, options.after_measurement, ckpt, twin.get(), vision.get());
     }
     if (source_done && batch.empty() && queue.size() == 0) break;
     if (batch.empty()) std::this_thread::sleep_for(std::chrono::microseconds(200));
@@ -134,7 +156,7 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
   while (ok && !stopped()) {
     std::optional<Measurement> m = ordering.pop_any();
     if (!m) break;
-    ok = filter_one(run, *m, options.after_measurement, ckpt, twin.get());
+    ok = filter_one(run, *m, options.after_measurement, ckpt, twin.get(), vision.get());
   }
   stop.store(true);
   source.join();
@@ -149,6 +171,10 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
     if (run.error.empty() && !twin_error.empty()) run.error = twin_error;
   }
   run.wall_s = seconds_since(start);
+  if (vision) {
+    run.vision = vision->stats();
+    run.vision_answers = vision->applied();
+  }
   run.ordering = ordering.stats();
   run.log_span_s =
       1e-6 * static_cast<double>(run.source.last_monotonic_us - run.source.first_monotonic_us);

@@ -252,7 +252,27 @@ ReplaySummary make_replay_summary(const ReplayRun& run, const ReplayAnalysis& an
 
 std::string replay_summary_json(const ReplayRun& run, const ReplayAnalysis& analysis,
                                 const std::string& dive_dir, const std::string& config_path) {
-  return make_replay_summary(run, analysis, dive_dir, config_path).to_json();
+  const std::string json = make_replay_summary(run, analysis, dive_dir, config_path).to_json();
+  if (!run.vision) return json;
+  // vision.enabled: navd's own vision stage (vision/vision_link.h), its counters at the end.
+  const vision::VisionLinkStats& v = *run.vision;
+  nlohmann::json j = nlohmann::json::parse(json);
+  j["vision"] = {{"requests", v.worker.submitted},
+                 {"answered", v.worker.answered},
+                 {"succeeded", v.worker.succeeded},
+                 {"failed", v.worker.failed},
+                 {"expired", v.worker.expired},
+                 {"success_rate", v.worker.success_rate()},
+                 {"latency_ms_mean", v.worker.latency_ms_mean},
+                 {"latency_ms_max", v.worker.latency_ms_max},
+                 {"last_failure", v.worker.last_failure},
+                 {"without_prior", v.without_prior},
+                 {"refused", v.refused},
+                 {"cache_misses", v.cache.misses},
+                 {"cache_hits", v.cache.hits},
+                 {"cache_evictions", v.cache.evictions},
+                 {"cache_peak_mb", static_cast<double>(v.cache.peak_bytes) / (1024.0 * 1024.0)}};
+  return j.dump();
 }
 
 }  // namespace nav::daemon

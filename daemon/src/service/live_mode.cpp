@@ -24,6 +24,7 @@
 #include "nav/daemon/service/publisher.h"
 #include "nav/daemon/service/registration_listener.h"
 #include "nav/daemon/service/solution_board.h"
+#include "nav/daemon/service/vision_answers.h"
 #include "nav/daemon/sources/device_sources.h"
 
 namespace nav::daemon::service {
@@ -47,6 +48,10 @@ struct LiveFilter {
   /// The vision stage's answers (registration_listener.h); declared first: outlives `slam`.
   std::unique_ptr<daemon::RegistrationInbox> inbox;
   std::unique_ptr<LinkProposalPublisher> proposals;
+  /// vision.enabled: navd's own vision stage answering the proposals (vision_answers.h);
+  /// the link is declared after its publisher, so its threads stop first.
+  std::unique_ptr<VisionAnswerPublisher> vision_answers;
+  std::unique_ptr<daemon::vision::VisionLink> vision;
   std::unique_ptr<daemon::NavFilter> slam;
   std::optional<daemon::ResumeSkipper> skipper;
   std::unique_ptr<daemon::NavFilterCheckpointer> checkpointer;
@@ -57,6 +62,10 @@ LiveFilter make_live_filter(const daemon::NavdConfig& config, bool checkpoints) 
   LiveFilter live;
   live.inbox = std::make_unique<daemon::RegistrationInbox>(kRegistrationCapacity);
   live.proposals = std::make_unique<LinkProposalPublisher>(config);
+  if (config.vision.enabled) {
+    live.vision_answers = std::make_unique<VisionAnswerPublisher>(config.lcm);
+    live.vision = make_live_vision(config, *live.vision_answers);
+  }
   const daemon::RegistrationTable* table = &live.inbox->table();
   auto make = [&] { return std::make_unique<daemon::NavFilter>(options, table); };
   live.slam = make();
@@ -86,6 +95,7 @@ std::string filter_one(LiveFilter& live, const daemon::Measurement& m, LinkPubli
   if (live.checkpointer) live.checkpointer->after_measurement(*live.slam, m);
   links.on_measurement(*live.slam);
   live.proposals->on_measurement(*live.slam);
+  if (live.vision) live.vision->after_measurement(*live.slam);
   return {};
 }
 
@@ -165,6 +175,7 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
   LinkPublisher links(config.lcm, board);
   NavdDevices devices(config, queue);
   devices.attach(publisher);
+  publisher.set_vision(live.vision.get());
   RegistrationListener registrations(config.lcm, *live.inbox);
   if (config.filter.registration_wait_s <= 0.0) {
     spdlog::warn(

@@ -88,6 +88,15 @@ void Publisher::publish_health(const SolutionView& view) {
   msg.rss_mb = usage.rss_mb;
   msg.peak_rss_mb = usage.peak_rss_mb;
   msg.status = view.status_line;
+  if (vision_ != nullptr) {
+    const daemon::vision::VisionWorkerCounters v = vision_->stats().worker;
+    msg.vision_queue_depth = static_cast<std::int32_t>(v.queue_depth);
+    msg.vision_latency_ms = v.latency_ms_mean;
+    msg.vision_success_rate = v.success_rate();
+    msg.vision_answered = static_cast<std::int64_t>(v.answered);
+    msg.vision_expired = static_cast<std::int64_t>(v.expired);
+    msg.vision_last_failure = v.last_failure;
+  }
   if (lcm_->publish(config_.health.name, &msg) == 0) {
     ++counters_.health;
   } else {

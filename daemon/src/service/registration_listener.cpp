@@ -9,6 +9,7 @@
 
 #include "nav/daemon/system/host_clock.h"
 #include "nav/daemon/sources/camera_source.h"
+#include "nav/daemon/vision/camera_prior.h"
 
 namespace nav::daemon::service {
 RegistrationListener::RegistrationListener(const daemon::LcmConfig& config,
@@ -45,11 +46,40 @@ void RegistrationListener::join() {
 }
 
 LinkProposalPublisher::LinkProposalPublisher(const daemon::NavdConfig& config)
-    : channel_(config.lcm.link_proposals.name), lcm_(std::make_unique<lcm::LCM>(config.lcm.url)) {
+    : channel_(config.lcm.link_proposals.name),
+      vision_(config.vision),
+      lcm_(std::make_unique<lcm::LCM>(config.lcm.url)) {
   for (const daemon::SensorConfig& s : config.sensors) {
     if (!s.camera.image_dir.empty()) image_dir_prefix_ = "images/";
   }
+  for (auto it = config.sensors.rbegin(); it != config.sensors.rend(); ++it) {
+    if (!daemon::is_camera(it->type)) continue;  // the first camera wins (filter_options.cpp)
+    const auto& m = it->mount;
+    x_body_camera_ << m.lever_arm_m[0], m.lever_arm_m[1], m.lever_arm_m[2], m.rpy_rad[0],
+        m.rpy_rad[1], m.rpy_rad[2];
+  }
 }
+
+namespace {
+
+/// The pair's pose prior and altitudes (link_proposal_t's prior fields).
+void fill_prior(const daemon::NavFilter& filter, const daemon::PendingRegistration& p,
+                const core::Vec6& x_body_camera, const daemon::VisionConfig& vision,
+                navlcm::link_proposal_t& msg) {
+  const auto prior = daemon::vision::pair_prior_from_filter(filter, p, x_body_camera, vision,
+                                                            nullptr);
+  msg.has_prior = prior.has_value();
+  if (!prior) return;
+  for (int r = 0; r < 6; ++r) {
+    msg.prior_x_i_j[r] = prior->x_i_j[r];
+    for (int c = 0; c < 6; ++c) msg.prior_covariance[6 * r + c] = prior->covariance(r, c);
+  }
+  msg.altitude_i_m = prior->scene_depth_m;
+  msg.altitude_j_m = filter.images().back().altitude_m;  // the robot is image j (prior found)
+  msg.altitude_sigma_m = prior->scene_depth_sigma_m;
+}
+
+}  // namespace
 
 LinkProposalPublisher::~LinkProposalPublisher() = default;
 
@@ -69,6 +99,7 @@ void LinkProposalPublisher::on_measurement(const daemon::NavFilter& filter) {
       msg.image_file_i = image_dir_prefix_ + daemon::frame_png_name(p.frame_i);
       msg.image_file_j = image_dir_prefix_ + daemon::frame_png_name(p.frame_j);
     }
+    fill_prior(filter, p, x_body_camera_, vision_, msg);
     if (lcm_->good() && lcm_->publish(channel_, &msg) == 0) {
       ++published_;
     } else {

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "nav/core/models/constant_velocity.h"
+#include "nav/daemon/config/vision_config.h"
 #include "nav/daemon/config/config_error.h"
 #include "nav/drivers/config/can_config.h"
 
@@ -176,6 +177,7 @@ struct NavdConfig {
   LcmConfig lcm;
   CheckpointConfig checkpoint;
   std::optional<SimDiveConfig> sim;  ///< the `sim` section, if present
+  VisionConfig vision;               ///< the `vision` section (vision_config.h)
 };
 
 /// Parses YAML text; `source` names it in errors; relative file names in it (CAN signal tables)

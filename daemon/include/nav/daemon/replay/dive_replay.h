@@ -4,7 +4,8 @@
 // MeasurementQueue -> TimeOrderingBuffer (filter.latency_window_ms) -> NavFilter, plus a second
 // NavFilter fed the same measurements without camera links (dead reckoning). Registrations
 // (NAV_REGISTRATION) are read before the replay (load_registrations), as the vision stage's
-// stand-in.
+// stand-in; with vision.enabled navd registers the dive's frames itself instead, answers applied
+// at data times (vision/vision_link.h), so the output is deterministic too.
 //
 // Recovery: the configured fixed PCG iterations (filter.cg_iterations_per_step per image)
 // synchronously at each image, or with filter.recovery_thread on NavFilter's recovery thread,
@@ -21,6 +22,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,6 +36,7 @@
 #include "nav/core/navigation/registration_table.h"
 #include "nav/daemon/sources/dive_log_source.h"
 #include "nav/daemon/queue/time_ordering.h"
+#include "nav/daemon/vision/vision_link.h"
 
 namespace nav::daemon {
 
@@ -72,6 +75,10 @@ struct ReplayRun {
   std::string error;        ///< non-empty: the filter or the source failed (what, where)
   std::string resumed_from;             ///< checkpoint file resumed ("" if none)
   std::uint64_t resumed_measurements = 0;  ///< measurements that checkpoint held (skipped)
+  /// vision.enabled: navd registered the frames itself (vision/vision_link.h) instead of
+  /// reading the log's registrations; its counters at the end.
+  std::optional<vision::VisionLinkStats> vision;
+  std::vector<vision::AppliedAnswer> vision_answers;  ///< every answer applied, in order
 };
 
 /// Plays `log_path` through the filters. Throws DiveLogError / ConfigError / invalid_argument

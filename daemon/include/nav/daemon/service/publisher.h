@@ -15,6 +15,7 @@
 #include "nav/daemon/service/health_innovations.h"
 #include "nav/daemon/service/solution_board.h"
 #include "nav/daemon/sources/sensor_health.h"
+#include "nav/daemon/vision/vision_link.h"
 
 namespace lcm {
 class LCM;
@@ -38,6 +39,8 @@ class Publisher {
   /// Per-sensor health of the device threads, published in health_t.sensors (call before
   /// run(); the publisher thread is then the board's only snapshot reader). Null: none.
   void set_sensor_health(daemon::SensorHealthBoard* sensors) { sensors_ = sensors; }
+  /// navd's own vision stage, whose counters health_t carries (vision_*). Null: none.
+  void set_vision(const daemon::vision::VisionLink* vision) { vision_ = vision; }
   /// Runs until `stop`, then publishes a last solution and health message.
   PublisherCounters run(const std::atomic<bool>& stop);
 
@@ -49,6 +52,7 @@ class Publisher {
   const SolutionBoard& board_;
   const daemon::MeasurementQueue& queue_;
   daemon::SensorHealthBoard* sensors_ = nullptr;
+  const daemon::vision::VisionLink* vision_ = nullptr;
   std::unique_ptr<lcm::LCM> lcm_;
   daemon::ProcessUsageMeter usage_;  ///< CPU % since the previous health_t
   HealthInnovations innovations_;    ///< NIS means since the previous health_t

@@ -8,7 +8,8 @@
 // * LinkProposalPublisher: on the filter thread after each measurement, link_proposal_t for
 //   every pair the NavFilter newly keeps waiting for its registration
 //   (lcm.channels.link_proposals, default NAV_LINK_PROPOSAL): what a vision process needs to
-//   register the two images and answer.
+//   register the two images and answer, with the pair's pose prior and the images' altitudes
+//   (has_prior false when the camera pair cannot be predicted: daemon/vision/camera_prior.h).
 
 #include <atomic>
 #include <cstdint>
@@ -61,6 +62,8 @@ class LinkProposalPublisher {
  private:
   std::string channel_;
   std::string image_dir_prefix_;  ///< "images/" when a camera writes PNGs, else ""
+  core::Vec6 x_body_camera_ = core::Vec6::Zero();  ///< the first camera's mount
+  daemon::VisionConfig vision_;                    ///< scene-depth sigma of the prior
   std::unique_ptr<lcm::LCM> lcm_;
   std::uint64_t last_sequence_ = 0;
   std::uint64_t published_ = 0, failures_ = 0;

@@ -1,0 +1,31 @@
+#pragma once
+// The `vision:` section of the navd config (config/README.md "vision"): navd registers its own
+// camera frames (daemon/include/nav/daemon/vision/vision_link.h) instead of reading the
+// registrations of a dive log (replay) or waiting for an external vision process (live).
+
+#include <string>
+
+namespace nav::daemon {
+
+struct VisionConfig {
+  bool enabled = false;  ///< enabled: true
+  int threads = 1;       ///< registration threads, [1, 64]
+  /// Features kept per image in the bounded LRU cache, [2, 100000] (about 1 MB per image at
+  /// ~2000 SIFT features: docs/performance.md "Vision in the loop").
+  int cache_images = 64;
+  /// Live mode: proposals waiting for a thread, [1, 100000]; beyond, the oldest expires.
+  int queue_capacity = 64;
+  /// Replay: data time from a pair's image to when its answer is applied, s, [0, 3600]; must be
+  /// below filter.registration_wait_s (else every pair expires).
+  double answer_delay_s = 1.0;
+  /// Directory of the frames (frame_png_name(frame_id) inside); "" = the dive directory's
+  /// images/ (replay) or the camera's image_dir (live).
+  std::string image_dir;
+  /// Expected frame size, pixels; 0 = not checked. A frame of another size fails its pairs.
+  int image_width_px = 0, image_height_px = 0;
+  /// Scene-depth prior: depth = altitude of image i, sigma = fraction * depth + floor.
+  double depth_sigma_fraction = 0.1;
+  double depth_sigma_floor_m = 0.2;
+};
+
+}  // namespace nav::daemon

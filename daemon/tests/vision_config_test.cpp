@@ -1,0 +1,70 @@
+// The `vision:` section of the navd config (config/vision_config.h, config/README.md "vision").
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "nav/daemon/config/config.h"
+
+namespace nav::daemon {
+namespace {
+
+const std::string kSensors = R"(
+sensors:
+  - name: dvl
+    type: dvl_pd0
+    transport: {type: serial, device: /dev/ttyUSB0}
+)";
+
+TEST(VisionConfig, DefaultsOffAndSectionReadsEveryKey) {
+  EXPECT_FALSE(parse_config(kSensors).vision.enabled);
+  const NavdConfig c = parse_config(kSensors + R"(
+vision:
+  enabled: true
+  threads: 3
+  cache_images: 10
+  queue_capacity: 5
+  answer_delay_s: 2.5
+  image_dir: /data/frames
+  image_width_px: 640
+  image_height_px: 480
+  depth_sigma_fraction: 0.2
+  depth_sigma_floor_m: 0.5
+)");
+  const VisionConfig& v = c.vision;
+  EXPECT_TRUE(v.enabled);
+  EXPECT_EQ(v.threads, 3);
+  EXPECT_EQ(v.cache_images, 10);
+  EXPECT_EQ(v.queue_capacity, 5);
+  EXPECT_EQ(v.answer_delay_s, 2.5);
+  EXPECT_EQ(v.image_dir, "/data/frames");
+  EXPECT_EQ(v.image_width_px, 640);
+  EXPECT_EQ(v.image_height_px, 480);
+  EXPECT_EQ(v.depth_sigma_fraction, 0.2);
+  EXPECT_EQ(v.depth_sigma_floor_m, 0.5);
+}
+
+TEST(VisionConfig, OutOfRangeAndUnknownKeysNameTheKey) {
+  try {
+    parse_config(kSensors + "vision: {threads: 0}\n", "t.yaml");
+    FAIL() << "threads 0 accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("vision.threads"), std::string::npos) << e.what();
+  }
+  try {
+    parse_config(kSensors + "vision: {thread: 2}\n", "t.yaml");
+    FAIL() << "unknown key accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("thread"), std::string::npos) << e.what();
+  }
+}
+
+TEST(VisionConfig, SimYamlHasTheRenderedFrameSizeAndVisionOff) {
+  const NavdConfig c =
+      load_config_file((std::filesystem::path(NAV_SOURCE_DIR) / "config" / "sim.yaml").string());
+  EXPECT_FALSE(c.vision.enabled);
+  EXPECT_EQ(c.vision.image_width_px, 1280);
+  EXPECT_EQ(c.vision.image_height_px, 1024);
+}
+
+}  // namespace
+}  // namespace nav::daemon
