@@ -55,8 +55,12 @@ struct LiveFilter {
 LiveFilter make_live_filter(const daemon::NavdConfig& config, bool checkpoints) {
   const daemon::NavFilterOptions options = daemon::filter_options_from_config(config);
   LiveFilter live;
-  live.inbox = std::make_unique<daemon::RegistrationInbox>(kRegistrationCapacity);
-  live.proposals = std::make_unique<LinkProposalPublisher>(config);
+  // A fresh run id per process (also after a resume): answers to an earlier run's proposals,
+  // e.g. a replayed log, are rejected (proposal_ledger.h).
+  const std::int64_t run_id = daemon::draw_run_id();
+  spdlog::info("navd: run id {:016x}", static_cast<std::uint64_t>(run_id));
+  live.inbox = std::make_unique<daemon::RegistrationInbox>(kRegistrationCapacity, run_id);
+  live.proposals = std::make_unique<LinkProposalPublisher>(config, live.inbox->ledger());
   const daemon::RegistrationTable* table = &live.inbox->table();
   auto make = [&] { return std::make_unique<daemon::NavFilter>(options, table); };
   live.slam = make();
@@ -102,7 +106,9 @@ std::string filter_loop(const daemon::NavdConfig& config, daemon::MeasurementQue
     batch.clear();
     queue.pop_bulk(batch, 256);
     for (const daemon::Measurement& m : batch) ordering.insert(m);
-    live.inbox->drain();  // registrations before the measurements they may answer
+    if (live.inbox->has_queued()) {  // registrations before the measurements they may answer
+      live.inbox->drain(live.slam->pending_registrations());
+    }
     while (std::optional<daemon::Measurement> m = ordering.pop_ready()) {
       if (std::string error = filter_one(live, *m, links); !error.empty()) return error;
     }
@@ -157,6 +163,10 @@ bool has_device_sensors(const daemon::NavdConfig& config) {
 
 int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
                   const sigset_t& stop_signals, const daemon::SdNotifier& notifier) {
+  std::optional<daemon::SigningKey> key;  // before anything starts: a bad key file stops navd
+  if (!config.lcm.registration_signing.key_file.empty()) {
+    key = daemon::load_signing_key(config.lcm.registration_signing.key_file);
+  }
   LiveFilter live = make_live_filter(config, args.checkpoints);
   daemon::MeasurementQueue queue(kQueueCapacity);
   SolutionBoard board;
@@ -165,7 +175,10 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
   LinkPublisher links(config.lcm, board);
   NavdDevices devices(config, queue);
   devices.attach(publisher);
-  RegistrationListener registrations(config.lcm, *live.inbox);
+  RegistrationListener registrations(config.lcm, *live.inbox, std::move(key));
+  publisher.set_health_fields([&](navlcm::health_t& h) {
+    fill_registration_health(*live.inbox, registrations, h);
+  });
   if (config.filter.registration_wait_s <= 0.0) {
     spdlog::warn(
         "navd: filter.registration_wait_s is 0: proposed pairs do not wait for the "
@@ -204,7 +217,7 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
       static_cast<unsigned long long>(counters.measurements), live.slam->images().size(),
       live.slam->links().size(), device_threads,
       static_cast<unsigned long long>(queue.total_dropped()), seconds_since(start),
-      registration_summary_json(*live.inbox, *live.slam).c_str());
+      registration_summary_json(*live.inbox, registrations, *live.slam).c_str());
   std::fflush(stdout);
   const int code = failure.empty() ? 0 : 1;
   if (!failure.empty()) spdlog::error("navd: live filter: {}", failure);

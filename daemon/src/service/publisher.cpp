@@ -88,6 +88,7 @@ void Publisher::publish_health(const SolutionView& view) {
   msg.rss_mb = usage.rss_mb;
   msg.peak_rss_mb = usage.peak_rss_mb;
   msg.status = view.status_line;
+  if (health_fields_) health_fields_(msg);
   if (lcm_->publish(config_.health.name, &msg) == 0) {
     ++counters_.health;
   } else {

@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -18,6 +19,9 @@
 
 namespace lcm {
 class LCM;
+}
+namespace navlcm {
+class health_t;
 }
 
 namespace nav::daemon::service {
@@ -38,6 +42,11 @@ class Publisher {
   /// Per-sensor health of the device threads, published in health_t.sensors (call before
   /// run(); the publisher thread is then the board's only snapshot reader). Null: none.
   void set_sensor_health(daemon::SensorHealthBoard* sensors) { sensors_ = sensors; }
+  /// Fills further health_t fields on the publisher thread before each publish (call before
+  /// run(); live mode: the registration counters, fill_registration_health()).
+  void set_health_fields(std::function<void(navlcm::health_t&)> fill) {
+    health_fields_ = std::move(fill);
+  }
   /// Runs until `stop`, then publishes a last solution and health message.
   PublisherCounters run(const std::atomic<bool>& stop);
 
@@ -49,6 +58,7 @@ class Publisher {
   const SolutionBoard& board_;
   const daemon::MeasurementQueue& queue_;
   daemon::SensorHealthBoard* sensors_ = nullptr;
+  std::function<void(navlcm::health_t&)> health_fields_;
   std::unique_ptr<lcm::LCM> lcm_;
   daemon::ProcessUsageMeter usage_;  ///< CPU % since the previous health_t
   HealthInnovations innovations_;    ///< NIS means since the previous health_t
