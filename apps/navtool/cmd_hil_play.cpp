@@ -185,8 +185,9 @@ void add_hil_play(CLI::App& app) {
   cmd->add_flag("--no-wait", args->no_wait,
                 "start at once instead of when every pty has a reader (navd opened them)");
   cmd->add_flag("--play-registrations", args->play_registrations,
-                "publish the log's NAV_REGISTRATION on --lcm-url at their log times (only "
-                "meaningful when navd's images are the dive's frames)");
+                "publish the log's NAV_REGISTRATION on --lcm-url at their log times (they "
+                "answer no proposal of the running navd, which rejects them as another run's: "
+                "docs/formats.md \"Provenance of registrations\")");
   cmd->add_flag("--no-camera", args->no_camera,
                 "do not serve camera_gige sensors with Aravis' fake GigE camera on lo");
   cmd->add_option("--camera-image-dir", args->camera_image_dir,

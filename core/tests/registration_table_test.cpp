@@ -60,6 +60,26 @@ TEST(RegistrationProblem, RefusesWhatTheGateCouldNotJudgeWithTheReason) {
   EXPECT_NE(registration_problem(r).value_or("").find("not positive definite"), std::string::npos);
 }
 
+// Found by daemon/fuzz/registration_fuzz.cpp: finite entries so large that the Frobenius norm
+// overflows (the symmetry test compared inf with inf) and Cholesky pivots that overflow to NaN
+// (which Eigen's LLT does not refuse) let an asymmetric covariance with zero variances through.
+TEST(RegistrationProblem, RefusesHugeFiniteEntriesWhoseNormOverflows) {
+  Registration r = valid();
+  r.covariance(3, 3) = 0.0;
+  r.covariance(4, 4) = 0.0;
+  r.covariance(3, 0) = 7.29e251;  // lower triangle only: asymmetric
+  r.covariance(2, 3) = 2.63e185;
+  ASSERT_TRUE(r.covariance.allFinite());
+  EXPECT_NE(registration_problem(r).value_or("").find("not symmetric"), std::string::npos);
+  r.covariance(0, 3) = r.covariance(3, 0);  // symmetric now, still zero variances
+  r.covariance(3, 2) = r.covariance(2, 3);
+  EXPECT_NE(registration_problem(r).value_or("").find("not positive definite"), std::string::npos);
+  // A valid covariance scaled to the largest finite doubles is still judged, not overflowed.
+  r = valid();
+  r.covariance *= 1e300 / r.covariance.maxCoeff();
+  EXPECT_FALSE(registration_problem(r).has_value()) << registration_problem(r).value_or("");
+}
+
 TEST(RegistrationTable, InsertKeepsTheFirstAnswerAndThrowsTheReasonForAnInvalidOne) {
   RegistrationTable table;
   EXPECT_TRUE(table.insert(valid()));

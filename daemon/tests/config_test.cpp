@@ -125,6 +125,22 @@ TEST(Config, RegistrationKeys) {
   EXPECT_EQ(e.key_path(), "filter.max_pending_registrations");
 }
 
+TEST(Config, RegistrationSigningKeys) {
+  NavdConfig c = parse_config(kMinimal);
+  EXPECT_TRUE(c.lcm.registration_signing.key_file.empty());  // off by default
+  c = parse_config(std::string(kMinimal) +
+                   "lcm: {registration_signing: {key_file: /etc/navd/k, window_s: 0.5}}\n");
+  EXPECT_EQ(c.lcm.registration_signing.key_file, "/etc/navd/k");
+  EXPECT_DOUBLE_EQ(c.lcm.registration_signing.window_s, 0.5);
+  ConfigError e = expect_error(std::string(kMinimal) + "lcm: {registration_signing: {}}\n");
+  EXPECT_EQ(e.key_path(), "lcm.registration_signing.key_file");
+  e = expect_error(std::string(kMinimal) +
+                   "lcm: {registration_signing: {key_file: k, window_s: 0}}\n");
+  EXPECT_EQ(e.key_path(), "lcm.registration_signing.window_s");
+  e = expect_error(std::string(kMinimal) + "lcm: {registration_signing: {key_file: \"\"}}\n");
+  EXPECT_EQ(e.key_path(), "lcm.registration_signing.key_file");
+}
+
 TEST(Config, RovYamlLoads) {
   const NavdConfig c = load_config_file((config_dir() / "rov.yaml").string());
   ASSERT_EQ(c.sensors.size(), 7u);

@@ -153,35 +153,59 @@ TEST(AsyncLinks, LiveInsertionGivesTheLinksOfReplayForTheSameArrivalTimes) {
   const RegistrationTable table = table_of(regs);
   const auto replay = run_replay(dive, table, async_options(3.0));
   // Live: each registration arrives (offer + drain on the filter thread) before the first
-  // measurement received at or after its utime, each twice (the duplicate with another
-  // measurement: the first answer is kept), plus an answer for frames never taken.
+  // measurement received at or after its utime, echoing this run's id and the sequence of
+  // the proposal it answers (as navd publishes them: LinkProposalPublisher), each twice (the
+  // copy with another measurement: the sequence is answered, the first answer is kept), plus
+  // answers for frames never taken and from another run.
   std::sort(regs.begin(), regs.end(),
             [](const auto& a, const auto& b) { return a.utime < b.utime; });
-  RegistrationInbox inbox(64);
+  constexpr std::int64_t kRun = 0x7e57;
+  RegistrationInbox inbox(64, kRun);
   NavFilter live(async_options(3.0), &inbox.table());
+  std::map<std::pair<std::int64_t, std::int64_t>, std::int64_t> sequence_of;
   navlcm::registration_t unknown = regs.front();
   unknown.frame_id_i = 1000;
   unknown.frame_id_j = 1001;
+  unknown.run_id = kRun;
   ASSERT_TRUE(inbox.offer(unknown));
-  std::size_t next = 0;
+  std::size_t next = 0, answered = 0;
   for (const Measurement& m : dive.measurements) {
     while (next < regs.size() && regs[next].utime <= time_of(m).host_realtime_us) {
-      navlcm::registration_t copy = regs[next];
+      navlcm::registration_t r = regs[next++];
+      const auto it = sequence_of.find({r.frame_id_i, r.frame_id_j});
+      if (it == sequence_of.end()) continue;  // never proposed: navd asked nobody for it
+      r.run_id = kRun;
+      r.sequence = it->second;
+      navlcm::registration_t copy = r;
       copy.measurement[0] += 0.5;
-      ASSERT_TRUE(inbox.offer(regs[next]));
+      navlcm::registration_t other_run = copy;
+      other_run.run_id = kRun + 1;
+      ASSERT_TRUE(inbox.offer(other_run));
+      ASSERT_TRUE(inbox.offer(r));
       ASSERT_TRUE(inbox.offer(copy));
-      ++next;
+      ++answered;
     }
-    inbox.drain();
+    if (inbox.has_queued()) inbox.drain(live.pending_registrations());
     ASSERT_TRUE(live.process(m).ok());
+    for (const PendingRegistration& p : live.pending_registrations()) {
+      const auto key = std::make_pair(static_cast<std::int64_t>(p.frame_i),
+                                      static_cast<std::int64_t>(p.frame_j));
+      if (sequence_of.emplace(key, static_cast<std::int64_t>(p.sequence)).second) {
+        inbox.ledger().propose(p.sequence);
+      }
+    }
   }
   ASSERT_TRUE(live.finish().ok());
   expect_same_links(*replay, live);
   EXPECT_GT(live.pending_counters().accepted, 20u);
   EXPECT_GT(live.pending_counters().expired, 0u);  // 3 s: some answers (up to 4.5 s) too late
   const RegistrationInboxCounters c = inbox.counters();
-  EXPECT_EQ(c.duplicates, next);
-  EXPECT_EQ(c.inserted, next + 1);
+  EXPECT_EQ(c.wrong_run, answered);
+  EXPECT_EQ(c.unknown_sequence, 1u);
+  EXPECT_EQ(c.inserted, c.already_answered);  // every taken answer's copy
+  EXPECT_EQ(c.inserted + c.already_answered + c.expired, 2 * answered);
+  EXPECT_GT(c.expired, 0u);
+  EXPECT_EQ(c.duplicates, 0u);
   EXPECT_EQ(c.dropped, 0u);
   for (const LinkRecord& l : live.links()) EXPECT_NE(l.frame_j, 1001u);
 }
@@ -226,8 +250,19 @@ TEST(AsyncLinks, PendingSetIsBounded) {
 }
 
 TEST(RegistrationInbox, KeepsTheFirstAnswerCountsInvalidAndDrops) {
-  RegistrationInbox inbox(4);
+  RegistrationInbox inbox(4, 99);
+  // The filter waits for the pair 1-2 twice (sequences 1 and 2) and for 3-3 (sequence 3).
+  std::vector<PendingRegistration> waiting(3);
+  for (std::uint64_t s = 1; s <= 3; ++s) {
+    waiting[s - 1].sequence = s;
+    waiting[s - 1].frame_i = s < 3 ? 1 : 3;
+    waiting[s - 1].frame_j = s < 3 ? 2 : 3;
+    waiting[s - 1].deadline_realtime_us = 1'000'000;
+    inbox.ledger().propose(s);
+  }
   navlcm::registration_t r{};
+  r.run_id = 99;
+  r.sequence = 1;
   r.frame_id_i = 1;
   r.frame_id_j = 2;
   r.success = true;
@@ -235,11 +270,13 @@ TEST(RegistrationInbox, KeepsTheFirstAnswerCountsInvalidAndDrops) {
   r.measurement[0] = 0.1;
   ASSERT_TRUE(inbox.offer(r));
   r.measurement[0] = 0.2;
+  r.sequence = 2;
   ASSERT_TRUE(inbox.offer(r));
+  r.sequence = 3;
   r.frame_id_i = 3;
   r.frame_id_j = 3;
   ASSERT_TRUE(inbox.offer(r));
-  EXPECT_EQ(inbox.drain(), 3u);
+  EXPECT_EQ(inbox.drain(waiting), 3u);
   const RegistrationInboxCounters c = inbox.counters();
   EXPECT_EQ(c.inserted, 1u);
   EXPECT_EQ(c.duplicates, 1u);
@@ -253,7 +290,8 @@ TEST(RegistrationInbox, KeepsTheFirstAnswerCountsInvalidAndDrops) {
   EXPECT_GT(refused, 0u);
   EXPECT_EQ(inbox.counters().dropped, refused);
   EXPECT_EQ(inbox.counters().received + refused, 10003u);
-  EXPECT_THROW(RegistrationInbox{0}, std::invalid_argument);
+  EXPECT_THROW((RegistrationInbox{0, 99}), std::invalid_argument);
+  EXPECT_THROW((RegistrationInbox{4, 0}), std::invalid_argument);
 }
 
 }  // namespace

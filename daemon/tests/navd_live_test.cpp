@@ -5,10 +5,14 @@
 // support/net_namespace.h, skipped with the reason where namespaces are not permitted), and
 // SIGTERM must stop navd within 1 s with exit status 0 and a JSON summary counting the
 // measurements the filter took. registration_t published on NAV_REGISTRATION reach the filter
-// thread (received, duplicate and invalid counted in the summary).
+// thread; answers to no proposal of this run (here with no run id, as from an old answerer or
+// a replayed log) are rejected and counted in the summary and in NAVD_HEALTH. With
+// lcm.registration_signing, unsigned, wrongly signed and stale answers are rejected before
+// (counted per reason), and a key file others can read stops navd naming the file and mode.
 #include <gtest/gtest.h>
 #include <pty.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -19,6 +23,7 @@
 #include <filesystem>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
+#include <navlcm/health_t.hpp>
 #include <navlcm/nav_solution_t.hpp>
 #include <navlcm/registration_t.hpp>
 #include <nlohmann/json.hpp>
@@ -27,6 +32,8 @@
 #include <thread>
 #include <vector>
 
+#include "nav/daemon/filter/registration_signature.h"
+#include "nav/daemon/system/host_clock.h"
 #include "support/navd_process.h"
 #include "support/net_namespace.h"
 #include "support/udpm_probe.h"
@@ -115,6 +122,10 @@ fs::path write_live_config(const fs::path& dir, const PtySensor& heading, const 
 
 struct Solutions {
   int count = 0;
+  navlcm::health_t health{};
+  void on_health(const lcm::ReceiveBuffer*, const std::string&, const navlcm::health_t* m) {
+    health = *m;
+  }
   navlcm::nav_solution_t first{}, last{};
   void on(const lcm::ReceiveBuffer*, const std::string&, const navlcm::nav_solution_t* m) {
     if (m->filter_status == 2) return;  // initialising
@@ -136,11 +147,14 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
       kNet.ok && lcm.good() && nav::tool::test::udpm_loops_back(lcm, "NAVD_LIVE_TEST_PROBE");
   Solutions got;
   if (udpm) lcm.subscribe("NAVD_SOLUTION", &Solutions::on, &got);
+  if (udpm) lcm.subscribe("NAVD_HEALTH", &Solutions::on_health, &got);
   const pid_t pid =
       spawn_navd({"--config", config.string(), "--lcm-url", udpm ? kUdpmUrl : "memq://"}, dir);
   const auto until = Clock::now() + std::chrono::milliseconds(2500);
-  // The vision stage's answers (NAV_REGISTRATION) reach the filter thread: one pair, its
-  // duplicate, one invalid (frame_id_i = frame_id_j), 1.5 s in (navd subscribed long before).
+  // Answers on NAV_REGISTRATION reach the filter thread: one pair, its duplicate, one with ids
+  // out of order, one with a NaN covariance, 1.5 s in (navd subscribed long before). None
+  // carries this run's id (navd proposed nothing: no camera), so all four are rejected as
+  // another run's before any other check.
   const auto answer_at = Clock::now() + std::chrono::milliseconds(1500);
   bool answered = false;
   while (Clock::now() < until) {
@@ -171,6 +185,10 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
   ASSERT_EQ(::kill(pid, SIGTERM), 0);
   const int code = wait_exit(pid, std::chrono::seconds(5));
   const double stop_s = std::chrono::duration<double>(Clock::now() - sent).count();
+  if (udpm) {
+    while (lcm.handleTimeout(200) > 0) {
+    }  // the last NAVD_HEALTH, published at stop
+  }
   const std::string out = slurp(dir / "navd.stdout"), err = slurp(dir / "navd.stderr");
   fs::remove_all(dir);
   EXPECT_EQ(code, 0) << err;
@@ -187,9 +205,14 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
   }
   ASSERT_GE(got.count, 5) << err;  // 10 Hz once initialised
   EXPECT_EQ(j["registrations"].get<int>(), 4) << out;
-  EXPECT_EQ(j["registrations_duplicate"].get<int>(), 1) << out;
-  EXPECT_EQ(j["registrations_invalid"].get<int>(), 2) << out;
+  EXPECT_EQ(j["registrations_wrong_run"].get<int>(), 4) << out;
+  EXPECT_EQ(j["registrations_duplicate"].get<int>(), 0) << out;
+  EXPECT_EQ(j["registrations_invalid"].get<int>(), 0) << out;
   EXPECT_EQ(j["registrations_dropped"].get<int>(), 0) << out;
+  // NAVD_HEALTH carries the same counts (its last message is published at stop).
+  EXPECT_EQ(got.health.registrations_received, 4) << out;
+  EXPECT_EQ(got.health.registrations_wrong_run, 4) << out;
+  EXPECT_EQ(got.health.registrations_invalid, 0) << out;
   EXPECT_NEAR(got.last.rph_rad[2], kHeadingDeg * M_PI / 180.0, 0.01);
   EXPECT_NEAR(got.last.p_world_m[2], 10.0, 0.5);
   EXPECT_NEAR(got.last.p_world_m[0], 0.0, 0.5);  // no velocity sensor: it stays at the origin
@@ -202,6 +225,89 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
   EXPECT_EQ(cholesky.info(), Eigen::Success) << P;
   EXPECT_LT(std::sqrt(P(5, 5)), 2.0 * M_PI / 180.0) << P;  // heading sigma
   EXPECT_LT(std::sqrt(P(2, 2)), 0.5) << P;                 // depth sigma
+}
+
+constexpr const char* kKeyHex = "8f0e3c2b1a09f8e7d6c5b4a3928170615f4e3d2c1b0a9f8e7d6c5b4a39281706";
+
+/// `config` with lcm.registration_signing naming `key_file` (2 s window).
+fs::path with_signing(const fs::path& config, const fs::path& key_file) {
+  std::string text = slurp(config);
+  const std::size_t lcm = text.find("lcm:\n");
+  EXPECT_NE(lcm, std::string::npos);
+  text.insert(lcm + 5, "  registration_signing: {key_file: " + key_file.string() +
+                           ", window_s: 2}\n");
+  const fs::path path = config.parent_path() / "signed.yaml";
+  std::ofstream(path) << text;
+  return path;
+}
+
+TEST(NavdLive, SigningRejectsUnsignedForgedAndStaleAnswersAndAnOpenKeyFile) {
+  const fs::path dir = fs::temp_directory_path() / ("navd_sign_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  PtySensor heading("$HEHDT,41.87,T*25\r\n", std::chrono::milliseconds(100));
+  PtySensor depth("*000129.3918\r\n", std::chrono::milliseconds(200));
+  ASSERT_TRUE(heading.ok() && depth.ok()) << "openpty failed";
+  const fs::path key_file = dir / "registration.key";
+  std::ofstream(key_file) << kKeyHex << "\n";
+  ASSERT_EQ(::chmod(key_file.c_str(), 0644), 0);
+  const fs::path config = with_signing(write_live_config(dir, heading, depth), key_file);
+  // A key file others can read: navd refuses to start, naming the file and its mode.
+  pid_t pid = spawn_navd({"--config", config.string(), "--lcm-url", "memq://"}, dir);
+  EXPECT_EQ(wait_exit(pid, std::chrono::seconds(5)), 1);
+  const std::string refused = slurp(dir / "navd.stderr");
+  EXPECT_NE(refused.find(key_file.string()), std::string::npos) << refused;
+  EXPECT_NE(refused.find("0644"), std::string::npos) << refused;
+  ASSERT_EQ(::chmod(key_file.c_str(), 0600), 0);
+
+  lcm::LCM lcm(kNet.ok ? kUdpmUrl : "memq://");
+  if (!kNet.ok || !lcm.good() || !nav::tool::test::udpm_loops_back(lcm, "NAVD_SIGN_PROBE")) {
+    fs::remove_all(dir);
+    GTEST_SKIP() << "udpm ttl=0 not available here: signed answers not checked";
+  }
+  Solutions got;
+  lcm.subscribe("NAVD_HEALTH", &Solutions::on_health, &got);
+  pid = spawn_navd({"--config", config.string(), "--lcm-url", kUdpmUrl}, dir);
+  const nav::daemon::SigningKey key = nav::daemon::signing_key_from_hex(kKeyHex);
+  const auto until = Clock::now() + std::chrono::milliseconds(2000);
+  const auto answer_at = Clock::now() + std::chrono::milliseconds(1000);
+  bool answered = false;
+  while (Clock::now() < until) {
+    lcm.handleTimeout(20);
+    if (answered || Clock::now() < answer_at) continue;
+    navlcm::registration_t r{};
+    r.frame_id_i = 1;
+    r.frame_id_j = 2;
+    r.success = true;
+    for (int k = 0; k < 25; k += 6) r.covariance[k] = 1e-4;
+    lcm.publish("NAV_REGISTRATION", &r);  // unsigned
+    const std::int64_t now = nav::daemon::realtime_us();
+    nav::daemon::sign_registration(r, key, 7, now - 10'000'000);  // 10 s old: stale
+    lcm.publish("NAV_REGISTRATION", &r);
+    nav::daemon::sign_registration(r, nav::daemon::signing_key_from_hex(std::string(64, 'f')), 7,
+                                   now);  // another key
+    lcm.publish("NAV_REGISTRATION", &r);
+    nav::daemon::sign_registration(r, key, 7, now);  // valid, but no proposal of this run
+    lcm.publish("NAV_REGISTRATION", &r);
+    lcm.publish("NAV_REGISTRATION", &r);  // the same again: stale (not after signer 7's last)
+    answered = true;
+  }
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  EXPECT_EQ(wait_exit(pid, std::chrono::seconds(5)), 0) << slurp(dir / "navd.stderr");
+  while (lcm.handleTimeout(200) > 0) {
+  }  // the last NAVD_HEALTH, published at stop
+  const std::string out = slurp(dir / "navd.stdout");
+  fs::remove_all(dir);
+  const nlohmann::json j = nlohmann::json::parse(out);
+  EXPECT_EQ(j["registrations_unsigned"].get<int>(), 1) << out;
+  EXPECT_EQ(j["registrations_stale_signature"].get<int>(), 2) << out;
+  EXPECT_EQ(j["registrations_bad_signature"].get<int>(), 1) << out;
+  EXPECT_EQ(j["registrations_wrong_run"].get<int>(), 1) << out;
+  EXPECT_EQ(j["registrations"].get<int>(), 1) << out;  // only the valid one was queued
+  EXPECT_EQ(got.health.registrations_received, 5);
+  EXPECT_EQ(got.health.registrations_unsigned, 1);
+  EXPECT_EQ(got.health.registrations_stale_signature, 2);
+  EXPECT_EQ(got.health.registrations_bad_signature, 1);
+  EXPECT_EQ(got.health.registrations_wrong_run, 1);
 }
 
 }  // namespace

@@ -29,8 +29,16 @@ std::optional<std::string> registration_problem(const Registration& r) {
   }
   const Eigen::Matrix<double, 5, 5>& P = r.covariance;
   if (!P.allFinite()) return pair + "covariance is not finite";
-  if ((P - P.transpose()).norm() > 1e-9 * P.norm()) return pair + "covariance is not symmetric";
-  if (Eigen::LLT<Eigen::Matrix<double, 5, 5>>(P).info() != Eigen::Success) {
+  // Judged on P scaled by its largest entry, so that huge finite entries (whose Frobenius norm
+  // overflows to inf, and inf > 1e-9 * inf is false) cannot pass the symmetry test.
+  const double scale = P.cwiseAbs().maxCoeff();
+  if (scale == 0.0) return pair + "covariance is not positive definite";
+  const Eigen::Matrix<double, 5, 5> S = P / scale;
+  if ((S - S.transpose()).norm() > 1e-9 * S.norm()) return pair + "covariance is not symmetric";
+  // Eigen's LLT only refuses a pivot <= 0: one that overflowed to NaN would pass, so the
+  // factor must be finite too.
+  const Eigen::LLT<Eigen::Matrix<double, 5, 5>> llt(P);
+  if (llt.info() != Eigen::Success || !llt.matrixL().toDenseMatrix().allFinite()) {
     return pair + "covariance is not positive definite";
   }
   return std::nullopt;

@@ -23,9 +23,9 @@ bool CheckpointWorker::offer(std::uint32_t payload_version, std::vector<std::uin
       ++stats_.superseded;
       replaced = std::move(pending_);
     }
-    pending_.emplace();
-    pending_->version = payload_version;
-    pending_->payload = std::move(payload);
+    // Not emplace(): clang rejects default-constructing a nested struct with default member
+    // initialisers inside std::optional (is_constructible is false while the class is parsed).
+    pending_ = Pending{payload_version, std::move(payload)};
   }
   wake_.notify_one();
   return true;

@@ -61,7 +61,7 @@ void parse_channel(const YamlReader& parent, std::string_view key, LcmChannel& o
 }
 
 LcmConfig parse_lcm(const YamlReader& l) {
-  l.expect_map({"url", "channels"});
+  l.expect_map({"url", "channels", "registration_signing"});
   LcmConfig lcm;
   l.read("url", lcm.url);
   const std::string_view schemes[] = {"udpm://", "file://", "memq://"};
@@ -79,6 +79,13 @@ LcmConfig parse_lcm(const YamlReader& l) {
     parse_channel(c, "camera_links", lcm.camera_links);
     parse_channel(c, "registration", lcm.registration);
     parse_channel(c, "link_proposals", lcm.link_proposals);
+  }
+  if (l.has("registration_signing")) {
+    const YamlReader g = l.at("registration_signing");
+    g.expect_map({"key_file", "window_s"});
+    g.read("key_file", lcm.registration_signing.key_file, true);
+    if (lcm.registration_signing.key_file.empty()) g.at("key_file").fail("must not be empty");
+    g.read("window_s", lcm.registration_signing.window_s, 1e-3, 3600.0);
   }
   return lcm;
 }

@@ -60,10 +60,14 @@ struct LiveFilter {
 LiveFilter make_live_filter(const daemon::NavdConfig& config, bool checkpoints) {
   const daemon::NavFilterOptions options = daemon::filter_options_from_config(config);
   LiveFilter live;
-  live.inbox = std::make_unique<daemon::RegistrationInbox>(kRegistrationCapacity);
-  live.proposals = std::make_unique<LinkProposalPublisher>(config);
+  // A fresh run id per process (also after a resume): answers to an earlier run's proposals,
+  // e.g. a replayed log, are rejected (proposal_ledger.h).
+  const std::int64_t run_id = daemon::draw_run_id();
+  spdlog::info("navd: run id {:016x}", static_cast<std::uint64_t>(run_id));
+  live.inbox = std::make_unique<daemon::RegistrationInbox>(kRegistrationCapacity, run_id);
+  live.proposals = std::make_unique<LinkProposalPublisher>(config, live.inbox->ledger());
   if (config.vision.enabled) {
-    live.vision_answers = std::make_unique<VisionAnswerPublisher>(config.lcm);
+    live.vision_answers = std::make_unique<VisionAnswerPublisher>(config.lcm, run_id);
     live.vision = make_live_vision(config, *live.vision_answers);
   }
   const daemon::RegistrationTable* table = &live.inbox->table();
@@ -112,7 +116,9 @@ std::string filter_loop(const daemon::NavdConfig& config, daemon::MeasurementQue
     batch.clear();
     queue.pop_bulk(batch, 256);
     for (const daemon::Measurement& m : batch) ordering.insert(m);
-    live.inbox->drain();  // registrations before the measurements they may answer
+    if (live.inbox->has_queued()) {  // registrations before the measurements they may answer
+      live.inbox->drain(live.slam->pending_registrations());
+    }
     while (std::optional<daemon::Measurement> m = ordering.pop_ready()) {
       if (std::string error = filter_one(live, *m, links); !error.empty()) return error;
     }
@@ -167,7 +173,12 @@ bool has_device_sensors(const daemon::NavdConfig& config) {
 
 int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
                   const sigset_t& stop_signals, const daemon::SdNotifier& notifier) {
+  std::optional<daemon::SigningKey> key;  // before anything starts: a bad key file stops navd
+  if (!config.lcm.registration_signing.key_file.empty()) {
+    key = daemon::load_signing_key(config.lcm.registration_signing.key_file);
+  }
   LiveFilter live = make_live_filter(config, args.checkpoints);
+  if (key && live.vision_answers) live.vision_answers->set_signing_key(*key);
   daemon::MeasurementQueue queue(kQueueCapacity);
   SolutionBoard board;
   Publisher publisher(config.lcm, board, queue);
@@ -176,7 +187,10 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
   NavdDevices devices(config, queue);
   devices.attach(publisher);
   publisher.set_vision(live.vision.get());
-  RegistrationListener registrations(config.lcm, *live.inbox);
+  RegistrationListener registrations(config.lcm, *live.inbox, std::move(key));
+  publisher.set_health_fields([&](navlcm::health_t& h) {
+    fill_registration_health(*live.inbox, registrations, h);
+  });
   if (config.filter.registration_wait_s <= 0.0) {
     spdlog::warn(
         "navd: filter.registration_wait_s is 0: proposed pairs do not wait for the "
@@ -215,7 +229,7 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
       static_cast<unsigned long long>(counters.measurements), live.slam->images().size(),
       live.slam->links().size(), device_threads,
       static_cast<unsigned long long>(queue.total_dropped()), seconds_since(start),
-      registration_summary_json(*live.inbox, *live.slam).c_str());
+      registration_summary_json(*live.inbox, registrations, *live.slam).c_str());
   std::fflush(stdout);
   const int code = failure.empty() ? 0 : 1;
   if (!failure.empty()) spdlog::error("navd: live filter: {}", failure);

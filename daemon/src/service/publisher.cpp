@@ -97,6 +97,7 @@ void Publisher::publish_health(const SolutionView& view) {
     msg.vision_expired = static_cast<std::int64_t>(v.expired);
     msg.vision_last_failure = v.last_failure;
   }
+  if (health_fields_) health_fields_(msg);
   if (lcm_->publish(config_.health.name, &msg) == 0) {
     ++counters_.health;
   } else {

@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <lcm/lcm-cpp.hpp>
+#include <navlcm/health_t.hpp>
 #include <navlcm/link_proposal_t.hpp>
 #include <navlcm/registration_t.hpp>
 
@@ -13,8 +14,13 @@
 
 namespace nav::daemon::service {
 RegistrationListener::RegistrationListener(const daemon::LcmConfig& config,
-                                           daemon::RegistrationInbox& inbox)
+                                           daemon::RegistrationInbox& inbox,
+                                           std::optional<daemon::SigningKey> key)
     : lcm_(std::make_unique<lcm::LCM>(config.url)), inbox_(inbox) {
+  if (key) {
+    signatures_.emplace(std::move(*key),
+                        static_cast<std::int64_t>(config.registration_signing.window_s * 1e6));
+  }
   if (!lcm_->good()) return;
   lcm_->subscribeFunction(config.registration.name, &RegistrationListener::on_message, this);
 }
@@ -27,7 +33,23 @@ void RegistrationListener::on_message(const lcm::ReceiveBuffer* rbuf, const std:
     spdlog::warn("navd: {}: {} bytes that are not a registration_t", channel, rbuf->data_size);
     return;
   }
+  if (self->signatures_ && !self->admit_signed(r)) return;
   self->inbox_.offer(r);  // a full inbox counts the drop
+}
+
+bool RegistrationListener::admit_signed(const navlcm::registration_t& r) {
+  const daemon::SignatureVerdict v = signatures_->check(r, daemon::realtime_us());
+  std::atomic<std::uint64_t>* counter = v == daemon::SignatureVerdict::kUnsigned ? &unsigned_
+                                        : v == daemon::SignatureVerdict::kBadSignature
+                                            ? &bad_signature_
+                                            : &stale_signature_;
+  if (v == daemon::SignatureVerdict::kValid) return true;
+  if (counter->fetch_add(1) == 0) {  // the first of each reason logged, all counted
+    spdlog::warn("navd: registration_t {}-{} (signer {}) rejected: {} (further ones counted in "
+                 "health_t)",
+                 r.frame_id_i, r.frame_id_j, r.signer_id, daemon::to_string(v));
+  }
+  return false;
 }
 
 RegistrationListener::~RegistrationListener() { join(); }
@@ -45,8 +67,10 @@ void RegistrationListener::join() {
   if (thread_.joinable()) thread_.join();
 }
 
-LinkProposalPublisher::LinkProposalPublisher(const daemon::NavdConfig& config)
+LinkProposalPublisher::LinkProposalPublisher(const daemon::NavdConfig& config,
+                                             daemon::ProposalLedger& ledger)
     : channel_(config.lcm.link_proposals.name),
+      ledger_(ledger),
       vision_(config.vision),
       lcm_(std::make_unique<lcm::LCM>(config.lcm.url)) {
   for (const daemon::SensorConfig& s : config.sensors) {
@@ -95,6 +119,8 @@ void LinkProposalPublisher::on_measurement(const daemon::NavFilter& filter) {
     msg.time_of_validity_i_us = p.t_i_us;
     msg.time_of_validity_j_us = p.t_j_us;
     msg.deadline_utime = p.deadline_realtime_us;
+    msg.run_id = ledger_.run_id();
+    ledger_.propose(p.sequence);
     if (!image_dir_prefix_.empty()) {
       msg.image_file_i = image_dir_prefix_ + daemon::frame_png_name(p.frame_i);
       msg.image_file_j = image_dir_prefix_ + daemon::frame_png_name(p.frame_j);
@@ -110,22 +136,56 @@ void LinkProposalPublisher::on_measurement(const daemon::NavFilter& filter) {
 }
 
 std::string registration_summary_json(const daemon::RegistrationInbox& inbox,
+                                      const RegistrationListener& listener,
                                       const daemon::NavFilter& filter) {
   const daemon::RegistrationInboxCounters c = inbox.counters();
   const daemon::PendingRegistrationCounters& p = filter.pending_counters();
-  char text[512];
+  char text[1024];
   std::snprintf(
       text, sizeof text,
       ",\"links_accepted\":%llu,\"registrations\":%llu,\"registrations_dropped\":%llu,"
       "\"registrations_duplicate\":%llu,\"registrations_invalid\":%llu,"
       "\"pairs_deferred\":%llu,\"pairs_answered\":%llu,\"pairs_expired\":%llu,"
-      "\"pairs_not_deferred_full\":%llu",
+      "\"pairs_not_deferred_full\":%llu,\"registrations_wrong_run\":%llu,"
+      "\"registrations_unknown_sequence\":%llu,\"registrations_already_answered\":%llu,"
+      "\"registrations_expired\":%llu,\"registrations_pair_mismatch\":%llu,"
+      "\"registrations_inserted\":%llu",
       static_cast<unsigned long long>(filter.counters().links_accepted),
       static_cast<unsigned long long>(c.received), static_cast<unsigned long long>(c.dropped),
       static_cast<unsigned long long>(c.duplicates), static_cast<unsigned long long>(c.invalid),
       static_cast<unsigned long long>(p.deferred), static_cast<unsigned long long>(p.applied),
-      static_cast<unsigned long long>(p.expired), static_cast<unsigned long long>(p.dropped_full));
-  return text;
+      static_cast<unsigned long long>(p.expired), static_cast<unsigned long long>(p.dropped_full),
+      static_cast<unsigned long long>(c.wrong_run),
+      static_cast<unsigned long long>(c.unknown_sequence),
+      static_cast<unsigned long long>(c.already_answered),
+      static_cast<unsigned long long>(c.expired), static_cast<unsigned long long>(c.pair_mismatch),
+      static_cast<unsigned long long>(c.inserted));
+  char signing[256];
+  std::snprintf(signing, sizeof signing,
+                ",\"registrations_unsigned\":%llu,\"registrations_bad_signature\":%llu,"
+                "\"registrations_stale_signature\":%llu",
+                static_cast<unsigned long long>(listener.unsigned_answers()),
+                static_cast<unsigned long long>(listener.bad_signatures()),
+                static_cast<unsigned long long>(listener.stale_signatures()));
+  return std::string(text) + signing;
+}
+
+void fill_registration_health(const daemon::RegistrationInbox& inbox,
+                              const RegistrationListener& listener, navlcm::health_t& health) {
+  const daemon::RegistrationInboxCounters c = inbox.counters();
+  auto i64 = [](std::uint64_t v) { return static_cast<std::int64_t>(v); };
+  health.registrations_received =
+      i64(c.received + c.dropped + listener.unsigned_answers() + listener.bad_signatures() +
+          listener.stale_signatures());
+  health.registrations_wrong_run = i64(c.wrong_run);
+  health.registrations_unknown_sequence = i64(c.unknown_sequence);
+  health.registrations_expired = i64(c.expired);
+  health.registrations_already_answered = i64(c.already_answered);
+  health.registrations_pair_mismatch = i64(c.pair_mismatch);
+  health.registrations_invalid = i64(c.invalid);
+  health.registrations_unsigned = i64(listener.unsigned_answers());
+  health.registrations_bad_signature = i64(listener.bad_signatures());
+  health.registrations_stale_signature = i64(listener.stale_signatures());
 }
 
 }  // namespace nav::daemon::service

@@ -3,14 +3,18 @@
 
 #include <lcm/lcm-cpp.hpp>
 #include <navlcm/registration_t.hpp>
+#include <algorithm>
 #include <stdexcept>
 
 #include "nav/daemon/system/host_clock.h"
 
 namespace nav::daemon::service {
 
-VisionAnswerPublisher::VisionAnswerPublisher(const daemon::LcmConfig& config)
-    : channel_(config.registration.name), lcm_(std::make_unique<lcm::LCM>(config.url)) {}
+VisionAnswerPublisher::VisionAnswerPublisher(const daemon::LcmConfig& config,
+                                             std::int64_t run_id)
+    : channel_(config.registration.name),
+      run_id_(run_id),
+      lcm_(std::make_unique<lcm::LCM>(config.url)) {}
 
 VisionAnswerPublisher::~VisionAnswerPublisher() = default;
 
@@ -27,7 +31,13 @@ void VisionAnswerPublisher::publish(const daemon::vision::VisionAnswer& answer) 
   }
   msg.overlap_fraction = -1.0;  // unknown on the vehicle
   msg.is_outlier = false;
+  msg.run_id = run_id_;
+  msg.sequence = static_cast<std::int64_t>(answer.request.sequence);
   const std::lock_guard<std::mutex> lock(mutex_);
+  if (!key_.empty()) {
+    last_signed_us_ = std::max(daemon::realtime_us(), last_signed_us_ + 1);
+    daemon::sign_registration(msg, key_, kSignerId, last_signed_us_);
+  }
   if (lcm_->good() && lcm_->publish(channel_, &msg) == 0) {
     ++published_;
   } else {

@@ -90,7 +90,18 @@ nlohmann::json to_json(const navlcm::health_t& m) {
           {"cpu_percent", m.cpu_percent},
           {"rss_mb", m.rss_mb},
           {"peak_rss_mb", m.peak_rss_mb},
-          {"status", m.status}};
+          {"status", m.status},
+          {"registrations_received", m.registrations_received},
+          {"registrations_rejected",
+           {{"wrong_run", m.registrations_wrong_run},
+            {"unknown_sequence", m.registrations_unknown_sequence},
+            {"expired", m.registrations_expired},
+            {"already_answered", m.registrations_already_answered},
+            {"pair_mismatch", m.registrations_pair_mismatch},
+            {"invalid", m.registrations_invalid},
+            {"unsigned", m.registrations_unsigned},
+            {"bad_signature", m.registrations_bad_signature},
+            {"stale_signature", m.registrations_stale_signature}}}};
 }
 
 nlohmann::json to_json(const navlcm::delayed_state_bound_t& m) {
@@ -130,7 +141,8 @@ nlohmann::json to_json(const navlcm::link_proposal_t& m) {
           {"time_of_validity_j_us", m.time_of_validity_j_us},
           {"deadline_utime", m.deadline_utime},
           {"image_file_i", m.image_file_i},
-          {"image_file_j", m.image_file_j}};
+          {"image_file_j", m.image_file_j},
+          {"run_id", m.run_id}};
 }
 
 nlohmann::json to_json(const navlcm::image_metadata_t& m) {

@@ -7,7 +7,8 @@
 // player's dive_start_us / host_start_us; truth interpolated linearly between its 20 Hz rows),
 // plus the oracle's noise (baseline direction 0.5 deg, rotation 0.2 deg); success when the
 // camera centres are closer than 1.8 footprint radii at `altitude_m`, else a failed
-// registration. utime = the host's CLOCK_REALTIME when answered. Called on the thread that
+// registration. It echoes the proposal's run_id and sequence (navd applies only answers to its
+// own proposals). utime = the host's CLOCK_REALTIME when answered. Called on the thread that
 // runs lcm.handle*(); the answer is published from the handler.
 
 #include <atomic>
@@ -58,6 +59,8 @@ class OracleVision {
     navlcm::registration_t r{};
     r.frame_id_i = p->frame_id_i;
     r.frame_id_j = p->frame_id_j;
+    r.run_id = p->run_id;
+    r.sequence = p->sequence;
     r.success = (c_i.head<2>() - c_j.head<2>()).norm() < 1.8 * r_fp_m_;
     r.overlap_fraction = -1.0;
     const double sd_dir = 0.5 * M_PI / 180.0, sd_rot = 0.2 * M_PI / 180.0;

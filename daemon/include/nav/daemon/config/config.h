@@ -141,8 +141,16 @@ struct LcmChannel {
   std::string name;      ///< channel name, non-empty
   double rate_hz = 1.0;  ///< publish rate [1e-3, 1000]
 };
+/// lcm.registration_signing (registration_signature.h, config/README.md): off when key_file
+/// is empty. Then every registration_t must carry a valid HMAC-SHA256 signature whose time is
+/// within window_s of navd's clock and increasing per signer.
+struct RegistrationSigningConfig {
+  std::string key_file;   ///< hex key, mode 0600/0400, owned by navd's user ("" = off)
+  double window_s = 5.0;  ///< [1e-3, 3600]
+};
 struct LcmConfig {
   std::string url = "udpm://239.255.76.67:7667?ttl=0";
+  RegistrationSigningConfig registration_signing;
   LcmChannel nav_solution{"NAVD_SOLUTION", 10.0};
   LcmChannel health{"NAVD_HEALTH", 1.0};
   LcmChannel bounds{"NAVD_BOUNDS", 0.2};  ///< delayed_state_bound_t at each insert/tightening

@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -19,6 +20,9 @@
 
 namespace lcm {
 class LCM;
+}
+namespace navlcm {
+class health_t;
 }
 
 namespace nav::daemon::service {
@@ -41,6 +45,11 @@ class Publisher {
   void set_sensor_health(daemon::SensorHealthBoard* sensors) { sensors_ = sensors; }
   /// navd's own vision stage, whose counters health_t carries (vision_*). Null: none.
   void set_vision(const daemon::vision::VisionLink* vision) { vision_ = vision; }
+  /// Fills further health_t fields on the publisher thread before each publish (call before
+  /// run(); live mode: the registration counters, fill_registration_health()).
+  void set_health_fields(std::function<void(navlcm::health_t&)> fill) {
+    health_fields_ = std::move(fill);
+  }
   /// Runs until `stop`, then publishes a last solution and health message.
   PublisherCounters run(const std::atomic<bool>& stop);
 
@@ -53,6 +62,7 @@ class Publisher {
   const daemon::MeasurementQueue& queue_;
   daemon::SensorHealthBoard* sensors_ = nullptr;
   const daemon::vision::VisionLink* vision_ = nullptr;
+  std::function<void(navlcm::health_t&)> health_fields_;
   std::unique_ptr<lcm::LCM> lcm_;
   daemon::ProcessUsageMeter usage_;  ///< CPU % since the previous health_t
   HealthInnovations innovations_;    ///< NIS means since the previous health_t
