@@ -15,6 +15,18 @@ RegistrationListener::RegistrationListener(const daemon::LcmConfig& config,
                                            daemon::RegistrationInbox& inbox)
     : lcm_(std::make_unique<lcm::LCM>(config.url)), inbox_(inbox) {
   if (!lcm_->good()) return;
+  // getFileno() sets up LCM's receive side now (udpm: socket, receive thread and a multicast
+  // self test that waits up to 10 s) and is -1 when that fails. LCM 1.3.1's handleTimeout()
+  // would put that -1 into an fd_set, which glibc aborts on (found in hil-tests/vm, where the
+  // self test failed): so without a descriptor the receive thread never starts.
+  receiving_ = lcm_->getFileno() >= 0;
+  if (!receiving_) {
+    spdlog::error(
+        "navd: LCM cannot receive on {} (its multicast self test failed: check the route to "
+        "224.0.0.0/4 and IPAddressAllow=); {} answers are not received",
+        config.url, config.registration.name);
+    return;
+  }
   lcm_->subscribeFunction(config.registration.name, &RegistrationListener::on_message, this);
 }
 
@@ -31,10 +43,10 @@ void RegistrationListener::on_message(const lcm::ReceiveBuffer* rbuf, const std:
 
 RegistrationListener::~RegistrationListener() { join(); }
 
-bool RegistrationListener::good() const { return lcm_->good(); }
+bool RegistrationListener::good() const { return lcm_->good() && receiving_; }
 
 void RegistrationListener::start(const std::atomic<bool>& stop) {
-  if (!lcm_->good()) return;
+  if (!good()) return;
   thread_ = std::thread([this, &stop] {
     while (!stop.load()) lcm_->handleTimeout(50);
   });

@@ -31,7 +31,8 @@ namespace nav::daemon::service {
 class RegistrationListener {
  public:
   /// Subscribes at once (so nothing published after the constructor is missed); good() false
-  /// when LCM cannot open lcm.url (then nothing is received).
+  /// when LCM cannot open lcm.url or cannot receive on it (then nothing is received and no
+  /// thread runs).
   RegistrationListener(const daemon::LcmConfig& config, daemon::RegistrationInbox& inbox);
   ~RegistrationListener();  ///< stops and joins the thread
   bool good() const;
@@ -47,6 +48,7 @@ class RegistrationListener {
   daemon::RegistrationInbox& inbox_;
   std::thread thread_;
   std::atomic<std::uint64_t> decode_errors_{0};
+  bool receiving_ = false;  ///< LCM's receive side is set up (a valid getFileno())
 };
 
 class LinkProposalPublisher {
