@@ -115,7 +115,9 @@ class CanDvlWriter {
     f.time.realtime_us = raw.utime;
     f.time.monotonic_us = raw.host_monotonic_us;
     std::snprintf(f.interface_name.data(), f.interface_name.size(), "%s", kInterface);
-    const std::string line = nav::drivers::format_candump_log_line(f);
+    // docs/formats.md: one candump log line per frame, newline-terminated (the dive-log
+    // source's stream decoder needs the newline; format_candump_log_line gives none).
+    const std::string line = nav::drivers::format_candump_log_line(f) + "\n";
     out_.write_raw(sensor_, raw.utime, raw.host_monotonic_us,
                    {reinterpret_cast<const std::uint8_t*>(line.data()), line.size()});
   }
