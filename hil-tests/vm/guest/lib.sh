@@ -18,7 +18,7 @@ less_than() { awk -v a="$1" -v b="$2" 'BEGIN{exit !(a < b)}'; }
 
 # wait_for TIMEOUT_S COMMAND...: polls COMMAND every 0.2 s until it succeeds; 1 on timeout.
 wait_for() {
-  local deadline; deadline=$(awk -v t="$1" -v n="$(now_s)" 'BEGIN{print n + t}'); shift
+  local deadline; deadline=$(awk -v t="$1" -v n="$(now_s)" 'BEGIN{printf "%.3f", n + t}'); shift
   until "$@"; do
     less_than "$(now_s)" "$deadline" || return 1
     sleep 0.2
@@ -34,7 +34,7 @@ navd_pid() { navd_prop MainPID; }
 start_player() {
   mkdir -p "$HIL_DIR"; chown navd:navd "$HIL_DIR"; rm -f "$HIL_DIR/play.json"
   systemd-run --quiet --unit=navd-hil-player -p User=navd -p Group=navd \
-    /bin/sh -c "exec /usr/bin/navtool hil-play ${DIVE:-$NAVD_VM_DIR/dive} --no-camera \
+    /bin/sh -c "/usr/bin/navtool hil-play ${DIVE:-$NAVD_VM_DIR/dive} --no-camera \
       --serial-dir $HIL_DIR --config-out $HIL_DIR/navd-hil.yaml --json $* \
       > $HIL_DIR/play.json.part && mv $HIL_DIR/play.json.part $HIL_DIR/play.json"
   wait_for 30 test -e "$HIL_DIR/navd-hil.yaml" || fail "the HIL player made no pty in 30 s: \

@@ -1,7 +1,7 @@
 #!/bin/bash
 # `systemctl start navd` returns once navd sent READY=1 (Type=notify: sensors open, filter
 # initialised) and navd then publishes NAVD_SOLUTION and NAVD_HEALTH on LCM (lcm.url of
-# /etc/navd/navd.yaml, udpm on lo), at 10 Hz and 1 Hz.
+# /etc/navd/navd.yaml, udpm on lo), at 10 Hz and 1 Hz, and can receive there.
 . /usr/lib/navd-vm/lib.sh
 start_player --hold
 t0=$(now_s)
@@ -19,3 +19,7 @@ note "LCM in 5 s: $solutions NAVD_SOLUTION, $health NAVD_HEALTH"
 # 10 Hz and 1 Hz over 5 s, with margin for the logger's start-up under emulation.
 [ "$solutions" -ge 25 ] || fail "only $solutions NAVD_SOLUTION messages in 5 s (10 Hz expected)"
 [ "$health" -ge 3 ] || fail "only $health NAVD_HEALTH messages in 5 s (1 Hz expected)"
+# navd also receives (NAV_REGISTRATION from the vision stage): its LCM set up its receive side.
+if navd_journal | grep -q "LCM cannot receive"; then
+  fail "navd cannot receive on LCM: $(navd_journal | grep "LCM cannot receive")"
+fi
