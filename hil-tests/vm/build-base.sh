@@ -11,12 +11,8 @@ set -euo pipefail
 cache=$1; shift
 suite=bookworm
 mirror=${NAV_VM_MIRROR:-http://deb.debian.org/debian}
-arch=${NAV_VM_ARCH:-amd64}
-case "$arch" in
-  amd64) kernel_pkg=linux-image-amd64 ;;
-  arm64) kernel_pkg=linux-image-arm64 ;;
-  *) echo "build-base.sh: NAV_VM_ARCH=$arch: only amd64 and arm64" >&2; exit 1 ;;
-esac
+arch=amd64  # an arm64 guest would also need navd cross-built against an arm64 sysroot
+kernel_pkg=linux-image-amd64
 
 # Runtime packages: owners of the libraries the binaries load (host and guest are Debian 12).
 runtime_packages() {
@@ -25,7 +21,7 @@ runtime_packages() {
     xargs -r readlink -f)
   # One dpkg query for all (one per library takes minutes); /lib and /usr/lib are the same
   # directory (merged /usr) but dpkg records the path the package shipped.
-  # shellcheck disable=SC2086
+  # shellcheck disable=SC2086,SC2046
   { dpkg -S $libs 2>/dev/null; dpkg -S $(echo "$libs" | sed 's|^/usr/lib/|/lib/|') 2>/dev/null || true; } |
     cut -d: -f1 | sort -u
 }
@@ -37,11 +33,11 @@ include="$include,can-utils,liblcm-bin,$libs"
 # modules but CAN's (the initrd holds the disk's), /boot (copied out), the GL drivers and the
 # LLVM they use (navd links no GL), apt lists, documentation.
 trim_root() {
-  local root=$1 modules
+  local root=${1:?trim_root needs the root directory} modules
   modules=$(ls -d "$root"/usr/lib/modules/*)
   find "$modules/kernel" -name '*.ko*' ! -path '*/net/can/*' -delete
   chroot "$root" depmod -a "$(basename "$modules")"
-  rm -rf "$root"/boot/* "$root"/var/lib/apt/lists/* "$root"/var/cache/apt/archives/*.deb \
+  rm -rf "${root:?}"/boot/* "$root"/var/lib/apt/lists/* "$root"/var/cache/apt/archives/*.deb \
     "$root"/usr/share/doc "$root"/usr/share/man "$root"/usr/share/locale \
     "$root"/usr/lib/*-linux-gnu/dri "$root"/usr/lib/*-linux-gnu/libLLVM-*.so*
 }
