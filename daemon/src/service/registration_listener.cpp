@@ -22,6 +22,18 @@ RegistrationListener::RegistrationListener(const daemon::LcmConfig& config,
                         static_cast<std::int64_t>(config.registration_signing.window_s * 1e6));
   }
   if (!lcm_->good()) return;
+  // getFileno() sets up LCM's receive side now (udpm: socket, receive thread and a multicast
+  // self test that waits up to 10 s) and is -1 when that fails. LCM 1.3.1's handleTimeout()
+  // would put that -1 into an fd_set, which glibc aborts on (found in hil-tests/vm, where the
+  // self test failed): so without a descriptor the receive thread never starts.
+  receiving_ = lcm_->getFileno() >= 0;
+  if (!receiving_) {
+    spdlog::error(
+        "navd: LCM cannot receive on {} (its multicast self test failed: check the route to "
+        "224.0.0.0/4 and IPAddressAllow=); {} answers are not received",
+        config.url, config.registration.name);
+    return;
+  }
   lcm_->subscribeFunction(config.registration.name, &RegistrationListener::on_message, this);
 }
 
@@ -54,10 +66,10 @@ bool RegistrationListener::admit_signed(const navlcm::registration_t& r) {
 
 RegistrationListener::~RegistrationListener() { join(); }
 
-bool RegistrationListener::good() const { return lcm_->good(); }
+bool RegistrationListener::good() const { return lcm_->good() && receiving_; }
 
 void RegistrationListener::start(const std::atomic<bool>& stop) {
-  if (!lcm_->good()) return;
+  if (!good()) return;
   thread_ = std::thread([this, &stop] {
     while (!stop.load()) lcm_->handleTimeout(50);
   });

@@ -41,8 +41,9 @@ namespace nav::daemon::service {
 class RegistrationListener {
  public:
   /// Subscribes at once (so nothing published after the constructor is missed); good() false
-  /// when LCM cannot open lcm.url (then nothing is received). With `key` every answer must be
-  /// signed with it (window: config.registration_signing.window_s).
+  /// when LCM cannot open lcm.url or cannot receive on it (then nothing is received and no
+  /// thread runs). With `key` every answer must be signed with it (window:
+  /// config.registration_signing.window_s).
   RegistrationListener(const daemon::LcmConfig& config, daemon::RegistrationInbox& inbox,
                        std::optional<daemon::SigningKey> key = std::nullopt);
   ~RegistrationListener();  ///< stops and joins the thread
@@ -65,6 +66,7 @@ class RegistrationListener {
   std::thread thread_;
   std::atomic<std::uint64_t> decode_errors_{0};
   std::atomic<std::uint64_t> unsigned_{0}, bad_signature_{0}, stale_signature_{0};
+  bool receiving_ = false;  ///< LCM's receive side is set up (a valid getFileno())
 };
 
 class LinkProposalPublisher {
