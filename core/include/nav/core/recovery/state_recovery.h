@@ -89,10 +89,11 @@ struct StateRecoveryOptions {
   RecoveryPreconditioner preconditioner = RecoveryPreconditioner::kFactor;
   /// kFactor: refactor before a solve when `refresh_interval` solves (>= 1) used the factor, or
   /// when the previous solve left a covariance-column relative residual above
-  /// `refresh_residual` (> 0).
-  int refresh_interval = 10;
+  /// `refresh_residual` (> 0). 1: every solve refactors, so a solve depends only on Λ, η and
+  /// the warm start (a checkpointed or copied recovery continues bit-identically; a copy
+  /// carries no factor and refactors at its first solve).
+  int refresh_interval = 1;
   double refresh_residual = 1e-6;
-
   Status validate() const;
 };
 
@@ -158,10 +159,10 @@ class StateRecovery {
   Eigen::MatrixXd robot_covariance() const;
   /// Σ_{i r} (rows of block i of the robot column), block_dim x block_dim.
   Eigen::MatrixXd cross_covariance(int block) const;
-  /// E_r − Λ Σ^_{*r} of the last solve (n x block_dim; the recurrence residual when
-  /// recompute_true_residual is off): the input of the scaled certificate (bounds.h).
+  /// E_r − Λ Σ^_{*r} of the last solve (n x block_dim; recurrence residual when
+  /// recompute_true_residual is off): the scaled certificate's input (bounds.h).
   const Eigen::MatrixXd& column_residual() const { return column_residual_; }
-  /// kFactor: exact marginals of the Λ of the last refresh (null before the first).
+  /// kFactor: exact marginals of the last refresh's Λ (null before the first).
   const ExactMarginals* refreshed_marginals() const { return factor_.marginals(); }
 
  private:
