@@ -23,6 +23,7 @@
 #include "nav/core/posegraph/replay.h"
 #include "nav/core/recovery/consistency.h"
 #include "nav/core/recovery/exact_marginals.h"
+#include "nav/core/recovery/markov_blanket.h"
 #include "nav/core/recovery/state_recovery.h"
 #include "navtool/commands.h"
 #include "nav/report/csv_table.h"
@@ -48,6 +49,69 @@ struct CovarianceArgs {
   int histogram_bins = 20;
   double conservative_tolerance = 1e-9;
   std::string figure;  ///< Fig. 3 PNG path (empty: none)
+  std::string preconditioner = "factor";
+  int refresh_interval = 10;  ///< amortised refactorisation (the library default 1 refactors
+                              ///< every step, for bit-identical checkpoints)
+  double refresh_residual = core::StateRecoveryOptions{}.refresh_residual;
+  int checks = 100;  ///< time-of-use check times spread over the run
+};
+
+/// Paper Fig. 3 at the time of use: at a check step (after the recovery, where the links of
+/// the step are proposed), for every delayed state i the relative pose x_ri = (-)x_r (+) x_i
+/// under the joint the proposal uses (bounds.h) and under the Markov blanket, against the exact
+/// joint of the current Λ (robot column by one solve with the factor, Σ_ii by selected
+/// inversion); also every stored bound and every proposal joint checked against exact.
+struct TimeOfUse {
+  int checks = 0;
+  int bounds_checked = 0, bounds_conservative = 0;
+  int joints_checked = 0, joints_conservative = 0;
+  int markov_blanket_overconfident = 0;
+  double worst_min_eigenvalue = 1e300;
+  std::vector<double> ours, markov_blanket;
+
+  void check(const core::PoseGraphReplay& replay, double tolerance, bool with_mb) {
+    const core::Esdf& f = replay.filter();
+    const core::CovarianceBounds& bounds = replay.bounds();
+    const int d = f.block_dim();
+    const Eigen::SparseMatrix<double> lambda = f.information().to_sparse();
+    const core::ExactMarginals exact = core::ExactMarginals::compute(lambda, d);
+    Eigen::MatrixXd E = Eigen::MatrixXd::Zero(lambda.rows(), d);
+    E.topRows(d).setIdentity();
+    Eigen::MatrixXd column(lambda.rows(), d);
+    exact.solve(E, column);
+    ++checks;
+    const core::Vec6 x_r = f.mean_block(0).head<6>();
+    auto conservative = [&](const Eigen::MatrixXd& ours_m, const Eigen::MatrixXd& exact_m) {
+      double min_eig = 0.0;
+      const bool ok = core::is_conservative(ours_m, exact_m, tolerance, &min_eig);
+      worst_min_eigenvalue = std::min(worst_min_eigenvalue, min_eig);
+      return ok;
+    };
+    ++bounds_checked;
+    bounds_conservative += conservative(bounds.robot_bound(), exact.marginal(0)) ? 1 : 0;
+    for (int i = 1; i < f.num_blocks(); ++i) {
+      const Eigen::MatrixXd sigma_ii = exact.marginal(i);
+      ++bounds_checked;
+      bounds_conservative += conservative(bounds.bound(i), sigma_ii) ? 1 : 0;
+      core::LinkProposal p;
+      if (!bounds.propose(i, replay.recovery().cross_covariance(i), &p).ok()) continue;
+      core::Mat12 joint_exact;
+      joint_exact << column.topRows(d).transpose(), column.middleRows(i * d, d).transpose(),
+          column.middleRows(i * d, d), sigma_ii;
+      joint_exact = 0.5 * (joint_exact + joint_exact.transpose()).eval();
+      ++joints_checked;
+      joints_conservative += conservative(p.joint, joint_exact) ? 1 : 0;
+      const core::Vec6 x_i = f.mean_block(i).head<6>();
+      const core::Mat6 rel_exact = core::relative_pose_covariance(joint_exact, x_r, x_i);
+      ours.push_back(core::logdet_ratio(core::relative_pose_covariance(p.joint, x_r, x_i),
+                                        rel_exact));
+      if (!with_mb) continue;
+      const core::MarkovBlanketResult mb = core::markov_blanket_joint(f.information(), 0, i);
+      const core::Mat6 rel_mb = core::relative_pose_covariance(mb.joint, x_r, x_i);
+      markov_blanket.push_back(core::logdet_ratio(rel_mb, rel_exact));
+      if (!core::is_conservative(rel_mb, rel_exact, tolerance)) ++markov_blanket_overconfident;
+    }
+  }
 };
 
 double elapsed_ms(Clock::time_point since) {
@@ -128,6 +192,11 @@ core::ReplayOptions replay_options(const CovarianceArgs& a) {
   }
   o.recovery.kernel =
       a.kernel == "generic" ? core::RecoveryKernel::kGeneric : core::RecoveryKernel::kPacked;
+  o.recovery.preconditioner = a.preconditioner == "factor"
+                                  ? core::RecoveryPreconditioner::kFactor
+                                  : core::RecoveryPreconditioner::kBlockJacobi;
+  o.recovery.refresh_interval = a.refresh_interval;
+  o.recovery.refresh_residual = a.refresh_residual;
   o.bounds.certify_truncation = !a.no_certify;
   o.recovery_operator =
       a.csr ? core::RecoveryOperator::kCsrSnapshot : core::RecoveryOperator::kInformationMatrix;
@@ -149,7 +218,10 @@ void run_covariance(const CovarianceArgs& args) {
   std::vector<double> recovery_ms, recovery_cpu_ms, bounds_us_per_link;
   double max_relative_residual = 0.0;
   std::vector<double> relative_residuals;
-  int steps = 0, capped_steps = 0;
+  int steps = 0, capped_steps = 0, refreshes = 0;
+  std::vector<double> iterations;
+  TimeOfUse time_of_use;
+  const int check_every = std::max(1, (replay.num_vertices() - 1) / std::max(1, args.checks));
   while (!replay.done()) {
     const int vertex = replay.next_vertex();
     auto fail = [&](const core::Status& s) {
@@ -167,6 +239,16 @@ void run_covariance(const CovarianceArgs& args) {
     max_relative_residual = std::max(max_relative_residual, r.max_relative_residual);
     relative_residuals.push_back(r.max_relative_residual);
     if (r.hit_iteration_cap) ++capped_steps;
+    refreshes += r.refreshed ? 1 : 0;
+    iterations.push_back(r.iterations);
+    if (args.checks > 0 && vertex % check_every == 0) {
+      try {
+        time_of_use.check(replay, args.conservative_tolerance, !args.no_markov_blanket);
+      } catch (const std::exception& e) {
+        throw CommandError("covariance: time-of-use check at vertex " + std::to_string(vertex) +
+                           ": " + e.what());
+      }
+    }
     const int links = replay.current_links();
     t0 = Clock::now();
     if (core::Status s = replay.update_bounds(); !s.ok()) fail(s);
@@ -209,6 +291,29 @@ void run_covariance(const CovarianceArgs& args) {
   out["max_iterations_per_step"] =
       tolerance_mode ? json(options.recovery.max_iterations) : json(nullptr);
   out["capped_steps"] = capped_steps;
+  out["preconditioner"] = core::to_string(options.recovery.preconditioner);
+  out["refreshes"] = refreshes;
+  out["iterations_median"] = percentile(iterations, 0.5);
+  out["time_of_use_checks"] = time_of_use.checks;
+  out["time_of_use_check_every_steps"] = check_every;
+  out["time_of_use_bounds_checked"] = time_of_use.bounds_checked;
+  out["time_of_use_conservative_fraction"] =
+      time_of_use.bounds_checked > 0
+          ? static_cast<double>(time_of_use.bounds_conservative) / time_of_use.bounds_checked
+          : 0.0;
+  out["time_of_use_joints_checked"] = time_of_use.joints_checked;
+  out["time_of_use_joint_conservative_fraction"] =
+      time_of_use.joints_checked > 0
+          ? static_cast<double>(time_of_use.joints_conservative) / time_of_use.joints_checked
+          : 0.0;
+  out["time_of_use_worst_min_eigenvalue"] = time_of_use.worst_min_eigenvalue;
+  out["logdet_ratio_relative_ours"] = stats_json(time_of_use.ours);
+  out["logdet_ratio_relative_markov_blanket"] = stats_json(time_of_use.markov_blanket);
+  out["relative_markov_blanket_overconfident_fraction"] =
+      time_of_use.markov_blanket.empty()
+          ? json(nullptr)
+          : json(static_cast<double>(time_of_use.markov_blanket_overconfident) /
+                 static_cast<double>(time_of_use.markov_blanket.size()));
   out["certified_bounds"] = options.bounds.certify_truncation;
   out["operator"] = args.csr ? "csr-snapshot" : "information-matrix";
   out["kernel"] = core::to_string(options.recovery.kernel);
@@ -301,6 +406,20 @@ void add_covariance(CLI::App& app) {
                   "PCG kernel on the block matrix: packed (SIMD, incremental preconditioner) or "
                   "generic (the original, for comparison)")
       ->check(CLI::IsMember({"packed", "generic"}));
+  cmd->add_option("--preconditioner", args->preconditioner,
+                  "PCG preconditioner: factor (Cholesky of Λ refreshed every few steps, default) "
+                  "or block-jacobi")
+      ->check(CLI::IsMember({"factor", "block-jacobi"}));
+  cmd->add_option("--refresh-interval", args->refresh_interval,
+                  "factor: refactor after this many steps (default 10)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--refresh-residual", args->refresh_residual,
+                  "factor: refactor when the previous step's relative residual exceeded this")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--checks", args->checks,
+                  "time-of-use checks (relative-pose Fig. 3, bounds vs exact) spread evenly "
+                  "over the run (default 100; 0: none)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--no-markov-blanket", args->no_markov_blanket,
                 "skip the Markov-blanket comparison");
   cmd->add_option("--bins", args->histogram_bins, "Fig. 3 histogram bins")

@@ -53,17 +53,19 @@ TEST(CovarianceBounds, CertifiedInflationFollowsTheResidual) {
   CovarianceBounds bounds(2);
   ASSERT_TRUE(bounds.initialize_robot(Eigen::Matrix2d::Identity() * 4.0).ok());
   ASSERT_TRUE(bounds.insert(1).ok());
-  // L = λmax(B_11) + λmax(B_rr) = 4 + 4; ε_j = sqrt(λmax(B_jj) L) ‖R‖_F = sqrt(32) * 0.1.
+  // L = λmax(B_11) + λmax(B_rr) = 4 + 4, W = B_rr = 4 I, ρ = 0.1 (K1):
+  // κ² = L ρ² λmax(W⁻¹) = 8 · 0.01 / 4.
   ASSERT_TRUE(bounds.set_recovery(Eigen::Matrix2d::Identity(), 0.1, 2).ok());
   EXPECT_DOUBLE_EQ(bounds.certificate_lambda(), 8.0);
-  EXPECT_NEAR(bounds.epsilon(4.0), std::sqrt(32.0) * 0.1, 1e-15);
+  const double kappa = std::sqrt(0.02);
+  EXPECT_NEAR(bounds.kappa(), kappa, 1e-15);
   LinkProposal p;
   ASSERT_TRUE(bounds.propose(1, Eigen::Matrix2d::Zero(), &p).ok());
-  const double eps = std::sqrt(32.0) * 0.1;
-  EXPECT_NEAR(p.joint(0, 0), 1.0 + 2.0 * eps, 1e-14);  // Σ^_rr + (ε_r + ε_i)
-  EXPECT_NEAR(p.joint(2, 2), 4.0 + eps, 1e-14);        // Σ~_ii + ε_i
-  // The robot bound tightened to Σ^_rr + ε_r I (smaller trace than 4 I).
-  EXPECT_NEAR(bounds.robot_bound()(0, 0), 1.0 + eps, 1e-14);
+  EXPECT_NEAR(p.kappa, kappa, 1e-15);
+  EXPECT_NEAR(p.joint(0, 0), 1.0 + 2.0 * kappa * 4.0, 1e-14);  // Σ^_rr + 2κ W
+  EXPECT_NEAR(p.joint(2, 2), (1.0 + kappa) * 4.0, 1e-14);      // (1 + κ) Σ~_ii
+  // The robot bound tightened to Σ^_rr + κ W (smaller trace than 4 I).
+  EXPECT_NEAR(bounds.robot_bound()(0, 0), 1.0 + 4.0 * kappa, 1e-14);
 }
 
 /// rr + ii − ir − irᵀ of the first two elements, read from propose()'s joint.
@@ -133,7 +135,8 @@ struct DenseRun {
   int failed_updates = 0;  ///< joint not PSD enough for a Kalman update (stale recovery)
 };
 
-DenseRun run_dense(int budget, bool certify, bool direct, unsigned seed) {
+DenseRun run_dense(int budget, bool certify, bool direct, unsigned seed,
+                   bool matrix_certificate = false) {
   const int d = 6, steps = 25;
   std::mt19937 rng(seed);
   std::normal_distribution<double> normal;
@@ -180,8 +183,11 @@ DenseRun run_dense(int budget, bool certify, bool direct, unsigned seed) {
     const CsrMatrix csr = lambda.sparseView();
     const RecoveryResult r = recovery.solve(csr, lambda * mu);
     EXPECT_TRUE(r.status.ok()) << r.status.to_string();
-    EXPECT_TRUE(bounds.set_recovery(recovery.robot_covariance(), r.column_residual_spectral,
-                                    recovery.num_blocks())
+    EXPECT_TRUE((matrix_certificate
+                     ? bounds.set_recovery(recovery.robot_covariance(), recovery.column_residual(),
+                                           recovery.num_blocks())
+                     : bounds.set_recovery(recovery.robot_covariance(), r.column_residual_spectral,
+                                           recovery.num_blocks()))
                     .ok());
     // Links from the robot to up to two random older states (one of them possibly twice).
     std::uniform_int_distribution<int> pick(1, kept);
@@ -231,11 +237,14 @@ TEST(CovarianceBounds, ConservativeWithExactRecovery) {
 }
 
 TEST(CovarianceBounds, CertifiedBoundsStayConservativeUnderTruncatedCg) {
-  for (int budget : {0, 1, 2, 5}) {
-    for (unsigned seed : {1u, 2u, 3u}) {
-      const DenseRun run = run_dense(budget, /*certify=*/true, false, seed);
-      EXPECT_EQ(run.conservative, run.checked)
-          << "budget " << budget << " seed " << seed << ", worst min eig " << run.worst_min_eig;
+  for (bool matrix : {false, true}) {
+    for (int budget : {0, 1, 2, 5}) {
+      for (unsigned seed : {1u, 2u, 3u}) {
+        const DenseRun run = run_dense(budget, /*certify=*/true, false, seed, matrix);
+        EXPECT_EQ(run.conservative, run.checked) << "budget " << budget << " seed " << seed
+                                                 << " matrix certificate " << matrix
+                                                 << ", worst min eig " << run.worst_min_eig;
+      }
     }
   }
 }

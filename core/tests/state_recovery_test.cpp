@@ -172,6 +172,7 @@ TEST(StateRecovery, ResidualOptionsOfThePackedKernel) {
     StateRecoveryOptions o;
     o.iterations_per_step = iterations;
     o.recompute_true_residual = recompute;
+    o.preconditioner = RecoveryPreconditioner::kBlockJacobi;  // the packed kernel
     StateRecovery recovery(d, o);
     EXPECT_TRUE(recovery.set_solution(warm).ok());
     *result = recovery.solve(lambda, eta);

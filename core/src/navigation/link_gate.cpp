@@ -5,6 +5,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "nav/core/geometry/rotation.h"
@@ -17,12 +18,17 @@ constexpr int kD = 12;  // block dimension
 
 }  // namespace
 
-/// The joint without the truncation inflation: [Σ^_rr Σ^_ri; Σ^_ir Σ~_ii] (link_gate.h).
-Eigen::MatrixXd LinkGate::gate_joint(const LinkProposal& p) {
-  Eigen::MatrixXd joint = p.joint;
-  joint.topLeftCorner(kD, kD).diagonal().array() -= p.epsilon_robot + p.epsilon_state;
-  joint.bottomRightCorner(kD, kD).diagonal().array() -= p.epsilon_state;
-  return joint;
+/// The certified joint of the proposal (bounds.h), as it is (link_gate.h).
+Eigen::MatrixXd LinkGate::gate_joint(const LinkProposal& p) { return p.joint; }
+
+bool LinkGate::mahalanobis_sq(const Eigen::Matrix<double, 5, 5>& S, const MeasVec& nu,
+                              double* d2) {
+  // LLT fails on a non-positive pivot: an indefinite S cannot produce a (negative) d² that
+  // passes, as an LDLT without a sign check of D could.
+  const Eigen::LLT<Eigen::Matrix<double, 5, 5>> llt(0.5 * (S + S.transpose()));
+  if (llt.info() != Eigen::Success || !S.allFinite()) return false;
+  *d2 = llt.matrixL().solve(nu).squaredNorm();
+  return std::isfinite(*d2);
 }
 
 /// The 5-dof gate at the means x0 = [x_j; x_i] with the joint covariance: fills the link's
@@ -39,11 +45,11 @@ bool LinkGate::pass(const CameraRelativePoseModel& camera, const LinkPair& x0,
     Eigen::Matrix<double, 5, 2 * kD> H;
     H << H_r, H_i;
     const Eigen::Matrix<double, 5, 5> S = H * joint_cov * H.transpose() + reg.covariance;
-    const Eigen::LDLT<Eigen::Matrix<double, 5, 5>> ldlt(S);
     link.innovation = nu;
-    link.mahalanobis_sq = nu.dot(ldlt.solve(nu));
-    return ldlt.info() == Eigen::Success && std::isfinite(link.mahalanobis_sq) &&
-           link.mahalanobis_sq <= gate_chi2_;
+    double d2 = std::numeric_limits<double>::infinity();
+    const bool positive_definite = mahalanobis_sq(S, nu, &d2);
+    link.mahalanobis_sq = d2;
+    return positive_definite && d2 <= gate_chi2_;
   } catch (const std::exception& e) {
     if (warn_) {
       warn_("NavFilter: camera model for frames " + std::to_string(link.frame_i) + "-" +

@@ -28,6 +28,7 @@ StateRecoveryOptions filter_thread_recovery(const NavFilterOptions& options) {
   StateRecoveryOptions o = options.recovery;
   o.mode = RecoveryMode::kFixedIterations;
   o.iterations_per_step = 0;
+  o.preconditioner = RecoveryPreconditioner::kBlockJacobi;  // no factorisation on this thread
   return o;
 }
 

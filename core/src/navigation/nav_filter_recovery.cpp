@@ -37,8 +37,17 @@ bool NavFilter::certify(const RecoveryResult& result) {
          " us failed: " + result.status.to_string());
     return false;
   }
-  if (Status s = bounds_.set_recovery(recovery_.robot_covariance(),
-                                            result.column_residual_frobenius, filter_.num_blocks());
+  // A refactorisation of this Λ gives its exact marginals: the bounds restart from them
+  // (bounds.h "Exact refresh"), then the certificate of the recovered column (K1/K2).
+  if (result.refreshed && recovery_.refreshed_marginals() != nullptr) {
+    if (Status s = bounds_.refresh_exact(*recovery_.refreshed_marginals(), filter_.num_blocks());
+        !s.ok()) {
+      warn("NavFilter: exact refresh of the bounds at t = " + std::to_string(time_us_) +
+           " us skipped: " + s.to_string());
+    }
+  }
+  if (Status s = bounds_.set_recovery(recovery_.robot_covariance(), recovery_.column_residual(),
+                                      filter_.num_blocks());
       !s.ok()) {
     ++counters_.recovery_failures;
     warn("NavFilter: bounds certificate at t = " + std::to_string(time_us_) +

@@ -177,8 +177,12 @@ RecoveryResult PoseGraphReplay::recover() {
     result = recovery_.solve(filter_.information(), filter_.information_vector());
   }
   if (!result.status.ok()) return result;
-  result.status = bounds_.set_recovery(recovery_.robot_covariance(),
-                                       result.column_residual_spectral, filter_.num_blocks());
+  if (result.refreshed && recovery_.refreshed_marginals() != nullptr) {
+    result.status = bounds_.refresh_exact(*recovery_.refreshed_marginals(), filter_.num_blocks());
+    if (!result.status.ok()) return result;
+  }
+  result.status = bounds_.set_recovery(recovery_.robot_covariance(), recovery_.column_residual(),
+                                       filter_.num_blocks());
   return result;
 }
 

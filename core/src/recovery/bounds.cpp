@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -80,8 +81,9 @@ Status CovarianceBounds::initialize_robot(const Eigen::MatrixXd& P0) {
   lambda_sum_ = 0.0;
   set_robot_bound(P0);
   sigma_rr_hat_ = robot_bound_;
+  certificate_robot_bound_ = robot_bound_;
   residual_frobenius_ = 0.0;
-  epsilon_robot_ = 0.0;
+  kappa_ = 0.0;
   return Status::Ok();
 }
 
@@ -119,13 +121,53 @@ Status CovarianceBounds::insert(int state) {
   return Status::Ok();
 }
 
-double CovarianceBounds::epsilon(double lambda_max_block) const {
-  if (!options_.certify_truncation) return 0.0;
-  return std::sqrt(std::max(0.0, lambda_max_block) * certificate_lambda_) * residual_frobenius_;
+double lambda_max_scaled(const Eigen::MatrixXd& G, const Eigen::MatrixXd& W) {
+  // λmax(W^-½ G W^-½) = largest generalised eigenvalue of G v = λ W v (W SPD).
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> solver(symmetric(G), symmetric(W),
+                                                                   Eigen::EigenvaluesOnly);
+  if (solver.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
+  return std::max(0.0, solver.eigenvalues().maxCoeff());
 }
 
 Status CovarianceBounds::set_recovery(const Eigen::MatrixXd& sigma_rr, double residual_frobenius,
                                       int num_states) {
+  // (K1) with ‖R‖₂ <= ρ only: Rᵀ Σ R <= L ρ² I.
+  const double rho_sq = residual_frobenius * residual_frobenius;
+  return set_recovery_with(sigma_rr, residual_frobenius, num_states, [&](const Eigen::MatrixXd& W) {
+    return certificate_lambda_ * rho_sq *
+           lambda_max_scaled(Eigen::MatrixXd::Identity(block_dim_, block_dim_), W);
+  });
+}
+
+Status CovarianceBounds::set_recovery(const Eigen::MatrixXd& sigma_rr,
+                                      const Eigen::Ref<const Eigen::MatrixXd>& residual,
+                                      int num_states) {
+  const int d = block_dim_;
+  if (residual.rows() != Eigen::Index{num_states} * d || residual.cols() != d ||
+      !residual.allFinite()) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "CovarianceBounds::set_recovery: residual is " +
+                             std::to_string(residual.rows()) + "x" +
+                             std::to_string(residual.cols()) + ", expected finite " +
+                             std::to_string(num_states * d) + "x" + std::to_string(d));
+  }
+  const Eigen::MatrixXd gram = residual.transpose() * residual;
+  const double spectral = std::sqrt(std::max(0.0, lambda_max_symmetric(gram)));
+  return set_recovery_with(sigma_rr, spectral, num_states, [&](const Eigen::MatrixXd& W) {
+    // (K2): Rᵀ Σ R <= n Σ_j R_jᵀ B_jj R_j; (K1): Rᵀ Σ R <= L RᵀR. Both hold: take the smaller.
+    Eigen::MatrixXd scaled = residual.topRows(d).transpose() * W * residual.topRows(d);
+    for (int j = 1; j < num_states; ++j) {
+      const auto R_j = residual.middleRows(Eigen::Index{j} * d, d);
+      scaled.noalias() += R_j.transpose() * entries_[static_cast<size_t>(j)].bound * R_j;
+    }
+    return std::min(num_states * lambda_max_scaled(scaled, W),
+                    certificate_lambda_ * lambda_max_scaled(gram, W));
+  });
+}
+
+Status CovarianceBounds::set_recovery_with(
+    const Eigen::MatrixXd& sigma_rr, double residual_frobenius, int num_states,
+    const std::function<double(const Eigen::MatrixXd&)>& kappa_squared) {
   if (sigma_rr.rows() != block_dim_ || sigma_rr.cols() != block_dim_ || !finite(sigma_rr) ||
       !(residual_frobenius >= 0.0) || !std::isfinite(residual_frobenius)) {
     return Status::Error(StatusCode::kInvalidArgument,
@@ -145,15 +187,50 @@ Status CovarianceBounds::set_recovery(const Eigen::MatrixXd& sigma_rr, double re
   residual_frobenius_ = residual_frobenius;
   ++epoch_;  // bounds stored from now on are tightened within this snapshot
   certificate_lambda_ = lambda_max_sigma_bound();
+  certificate_robot_bound_ = robot_bound_;
   if (!options_.certify_truncation) {
-    epsilon_robot_ = 0.0;
+    kappa_ = 0.0;
     set_robot_bound(sigma_rr_hat_);
     return Status::Ok();
   }
-  epsilon_robot_ = epsilon(robot_lambda_max_);
-  const Eigen::MatrixXd candidate =
-      sigma_rr_hat_ + epsilon_robot_ * Eigen::MatrixXd::Identity(block_dim_, block_dim_);
+  kappa_ = residual_frobenius > 0.0 ? std::sqrt(std::max(0.0, kappa_squared(robot_bound_))) : 0.0;
+  if (!std::isfinite(kappa_)) kappa_ = std::numeric_limits<double>::max();
+  const Eigen::MatrixXd candidate = sigma_rr_hat_ + kappa_ * certificate_robot_bound_;
   if (candidate.trace() < robot_bound_.trace()) set_robot_bound(candidate);
+  return Status::Ok();
+}
+
+Status CovarianceBounds::refresh_exact(const ExactMarginals& exact, int num_states) {
+  if (exact.block_dim() != block_dim_ || exact.num_blocks() != num_states ||
+      num_bounds_ != num_states - 1) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "CovarianceBounds::refresh_exact: marginals of " +
+                             std::to_string(exact.num_blocks()) + " blocks of size " +
+                             std::to_string(exact.block_dim()) + " for a filter of " +
+                             std::to_string(num_states) + " blocks of size " +
+                             std::to_string(block_dim_) + " with " + std::to_string(num_bounds_) +
+                             " bounds");
+  }
+  const double tau = options_.exact_refresh_margin;
+  auto padded = [&](const Eigen::MatrixXd& sigma) {
+    // Scaled by the diagonal (each variance in its own unit): |Δ_kl| <= τ sqrt(Σ_kk Σ_ll) / d
+    // is covered, since d·diag(Σ) - Δ is diagonally dominant after the diagonal scaling.
+    const Eigen::MatrixXd s = symmetric(sigma);
+    Eigen::MatrixXd out = (1.0 + tau) * s;
+    out.diagonal() += tau * s.diagonal().cwiseAbs();
+    return out;
+  };
+  set_robot_bound(padded(exact.marginal(0)));
+  for (int j = 1; j < num_states; ++j) {
+    Entry& e = entries_[static_cast<size_t>(j)];
+    lambda_sum_ -= e.lambda_max;
+    e.bound = padded(exact.marginal(j));
+    e.lambda_max = std::max(0.0, lambda_max_symmetric(e.bound));
+    lambda_sum_ += e.lambda_max;
+    e.snapshot_bound.resize(0, 0);
+    e.snapshot_lambda_max = 0.0;
+    e.snapshot_epoch = -1;
+  }
   return Status::Ok();
 }
 
@@ -174,18 +251,16 @@ Status CovarianceBounds::propose(int state, const Eigen::MatrixXd& sigma_ir,
   // A bound tightened by a link of this snapshot is not a bound of the snapshot's Σ_ii.
   const bool tightened_now = e.snapshot_epoch == epoch_;
   const Eigen::MatrixXd& snapshot_bound = tightened_now ? e.snapshot_bound : e.bound;
-  const double snapshot_lambda = tightened_now ? e.snapshot_lambda_max : e.lambda_max;
   const int d = block_dim_;
-  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(d, d);
   proposal->state = state;
-  proposal->epsilon_robot = epsilon_robot_;
-  proposal->epsilon_state = epsilon(snapshot_lambda);
+  proposal->epsilon_robot = 0.0;
+  proposal->epsilon_state = 0.0;
+  proposal->kappa = kappa_;
   proposal->joint.resize(2 * d, 2 * d);
-  proposal->joint.topLeftCorner(d, d) =
-      sigma_rr_hat_ + (proposal->epsilon_robot + proposal->epsilon_state) * I;
+  proposal->joint.topLeftCorner(d, d) = sigma_rr_hat_ + (2.0 * kappa_) * certificate_robot_bound_;
   proposal->joint.bottomLeftCorner(d, d) = sigma_ir;
   proposal->joint.topRightCorner(d, d) = sigma_ir.transpose();
-  proposal->joint.bottomRightCorner(d, d) = snapshot_bound + proposal->epsilon_state * I;
+  proposal->joint.bottomRightCorner(d, d) = (1.0 + kappa_) * snapshot_bound;
   return Status::Ok();
 }
 
@@ -199,12 +274,9 @@ Status CovarianceBounds::offset_covariance_2d(int state, const Eigen::Matrix2d& 
   const Entry& e = entries_[static_cast<size_t>(state)];
   const bool tightened_now = e.snapshot_epoch == epoch_;  // as in propose()
   const Eigen::MatrixXd& snapshot_bound = tightened_now ? e.snapshot_bound : e.bound;
-  const double snapshot_lambda = tightened_now ? e.snapshot_lambda_max : e.lambda_max;
-  const double epsilon_state = epsilon(snapshot_lambda);
-  const Eigen::Matrix2d I = Eigen::Matrix2d::Identity();
-  const Eigen::Matrix2d rr =
-      sigma_rr_hat_.topLeftCorner<2, 2>() + (epsilon_robot_ + epsilon_state) * I;
-  const Eigen::Matrix2d ii = snapshot_bound.topLeftCorner<2, 2>() + epsilon_state * I;
+  const Eigen::Matrix2d rr = sigma_rr_hat_.topLeftCorner<2, 2>() +
+                             (2.0 * kappa_) * certificate_robot_bound_.topLeftCorner<2, 2>();
+  const Eigen::Matrix2d ii = (1.0 + kappa_) * snapshot_bound.topLeftCorner<2, 2>();
   const Eigen::Matrix2d& ir = sigma_ir_top_left;
   *covariance = rr + ii - ir - ir.transpose();
   return Status::Ok();

@@ -51,9 +51,16 @@ struct ExactMarginals::Impl {
   std::vector<int> inv_perm;        // inv_perm[original] = permuted
   double factor_ms = 0.0;
   double inversion_ms = 0.0;
+  // Reused buffers of solve() (cholmod_solve2).
+  mutable cholmod_dense* solve_x = nullptr;
+  mutable cholmod_dense* solve_y = nullptr;
+  mutable cholmod_dense* solve_e = nullptr;
 
   Impl() { cholmod_start(&common); }
   ~Impl() {
+    cholmod_free_dense(&solve_x, &common);
+    cholmod_free_dense(&solve_y, &common);
+    cholmod_free_dense(&solve_e, &common);
     if (L != nullptr) cholmod_free_factor(&L, &common);
     cholmod_finish(&common);
   }
@@ -400,6 +407,35 @@ Eigen::MatrixXd ExactMarginals::joint(int a, int b) const {
   cholmod_free_dense(&X, c);
   J = 0.5 * (J + J.transpose()).eval();
   return J;
+}
+
+void ExactMarginals::solve(const Eigen::Ref<const Eigen::MatrixXd>& B,
+                           Eigen::Ref<Eigen::MatrixXd> X) const {
+  if (B.rows() != impl_->n || X.rows() != impl_->n || X.cols() != B.cols()) {
+    throw ExactMarginalsError("ExactMarginals::solve: factor of dimension " +
+                              std::to_string(impl_->n) + ", B " + std::to_string(B.rows()) + "x" +
+                              std::to_string(B.cols()) + ", X " + std::to_string(X.rows()) + "x" +
+                              std::to_string(X.cols()));
+  }
+  if (B.cols() == 0) return;
+  cholmod_dense b{};
+  b.nrow = static_cast<size_t>(B.rows());
+  b.ncol = static_cast<size_t>(B.cols());
+  b.nzmax = b.nrow * b.ncol;
+  b.d = static_cast<size_t>(B.outerStride());
+  b.x = const_cast<double*>(B.data());  // read only (cholmod_solve2 does not write B)
+  b.xtype = CHOLMOD_REAL;
+  b.dtype = CHOLMOD_DOUBLE;
+  cholmod_common* c = &impl_->common;
+  if (!cholmod_solve2(CHOLMOD_A, impl_->L, &b, nullptr, &impl_->solve_x, nullptr,
+                      &impl_->solve_y, &impl_->solve_e, c) ||
+      impl_->solve_x == nullptr) {
+    throw ExactMarginalsError("ExactMarginals::solve: CHOLMOD solve failed (status " +
+                              std::to_string(c->status) + ")");
+  }
+  const auto* x = static_cast<const double*>(impl_->solve_x->x);
+  const auto ld = static_cast<Eigen::Index>(impl_->solve_x->d);
+  X = ConstMatMap(x, B.rows(), B.cols(), Eigen::OuterStride<>(ld));
 }
 
 }  // namespace nav::core

@@ -132,7 +132,7 @@ Status PcgOptions::validate() const {
   return Status::Ok();
 }
 
-PcgSummary solve_pcg(const SpdOperator& A, const BlockJacobiPreconditioner& M,
+PcgSummary solve_pcg(const SpdOperator& A, const Preconditioner& M,
                      const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::Ref<Eigen::MatrixXd> X,
                      const PcgOptions& options, PcgWorkspace& workspace) {
   PcgSummary summary;

@@ -35,6 +35,14 @@ const char* to_string(RecoveryKernel kernel) {
   return "unknown";
 }
 
+const char* to_string(RecoveryPreconditioner preconditioner) {
+  switch (preconditioner) {
+    case RecoveryPreconditioner::kBlockJacobi: return "block-jacobi";
+    case RecoveryPreconditioner::kFactor: return "factor";
+  }
+  return "unknown";
+}
+
 Status StateRecoveryOptions::validate() const {
   if (iterations_per_step < 0) {
     return Status::Error(StatusCode::kInvalidArgument,
@@ -45,6 +53,12 @@ Status StateRecoveryOptions::validate() const {
     return Status::Error(StatusCode::kInvalidArgument,
                          "StateRecoveryOptions.relative_tolerance must be finite and > 0, got " +
                              std::to_string(relative_tolerance));
+  }
+  if (refresh_interval < 1 || !(refresh_residual > 0.0)) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "StateRecoveryOptions: refresh_interval must be >= 1 and "
+                         "refresh_residual > 0, got " + std::to_string(refresh_interval) +
+                             " and " + std::to_string(refresh_residual));
   }
   if (max_iterations < 1) {
     return Status::Error(StatusCode::kInvalidArgument,
@@ -214,22 +228,45 @@ void StateRecovery::note_convergence(RecoveryResult& result, const PcgSummary& s
       result.status.ok() && options_.mode == RecoveryMode::kTolerance && !summary.converged;
 }
 
-RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Eigen::VectorXd& eta) {
+RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Preconditioner& M,
+                                         const Eigen::VectorXd& eta) {
   RecoveryResult result;
   result.mode = options_.mode;
   result.refactored_blocks = preconditioner_.num_blocks();
   fill_rhs(eta);
-  const PcgSummary summary =
-      solve_pcg(A, preconditioner_, rhs_, solution_, pcg_options(), workspace_);
+  const PcgSummary summary = solve_pcg(A, M, rhs_, solution_, pcg_options(), workspace_);
   result.status = summary.status;
   result.iterations = summary.iterations;
   if (summary.residual_norm.size() == rhs_.cols()) {
     finish(result, summary.residual_norm, rhs_.colwise().norm().transpose());
     // The workspace holds the final residual R = B - A X (n x (1 + d)).
     const auto R = workspace_.R.topLeftCorner(rhs_.rows(), rhs_.cols()).rightCols(block_dim_);
+    column_residual_ = R;
     set_spectral(result, R.transpose() * R);
   }
   note_convergence(result, summary);
+  return result;
+}
+
+RecoveryResult StateRecovery::solve_factor(const InformationMatrix& lambda,
+                                           const Eigen::VectorXd& eta) {
+  RecoveryResult result;
+  result.mode = options_.mode;
+  const bool refresh = !factor_.has_factor() || factor_.factored_dim() > lambda.dim() ||
+                       solves_since_refresh_ >= options_.refresh_interval ||
+                       !(last_column_residual_ <= options_.refresh_residual);
+  if (refresh) {
+    result.status = factor_.refresh(lambda.to_sparse(), block_dim_);
+    if (!result.status.ok()) return result;
+    solves_since_refresh_ = 0;
+  }
+  result.status = factor_.update_trailing(lambda);
+  if (!result.status.ok()) return result;
+  result = solve_with(InformationOperator(lambda), factor_, eta);
+  result.refactored_blocks = static_cast<int>((lambda.dim() - factor_.factored_dim()) / block_dim_);
+  result.refreshed = refresh;
+  ++solves_since_refresh_;
+  last_column_residual_ = result.column_relative_residual;
   return result;
 }
 
@@ -266,6 +303,12 @@ RecoveryResult StateRecovery::solve_packed(const InformationMatrix& lambda,
     finish(result, summary.residual_norm, rhs_norm);
     set_spectral(result,
                  packed_gram(packed_workspace_.R.data(), n, width, 1, block_dim_));
+    column_residual_.resize(n, block_dim_);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      for (int c = 0; c < block_dim_; ++c) {
+        column_residual_(i, c) = packed_workspace_.R[static_cast<size_t>(i * width + 1 + c)];
+      }
+    }
   }
   note_convergence(result, summary);
   return result;
@@ -288,6 +331,7 @@ RecoveryResult StateRecovery::solve_direct(const Eigen::SparseMatrix<double>& la
   const Eigen::MatrixXd residual = rhs_ - lambda * solution_;
   finish(result, residual.colwise().norm().transpose(), rhs_.colwise().norm().transpose());
   const auto R = residual.rightCols(block_dim_);
+  column_residual_ = R;
   set_spectral(result, R.transpose() * R);
   return result;
 }
@@ -303,7 +347,7 @@ RecoveryResult StateRecovery::solve(const CsrMatrix& lambda, const Eigen::Vector
   }
   result.status = preconditioner_.factor(lambda, block_dim_);
   if (!result.status.ok()) return result;
-  return solve_with(CsrOperator(lambda), eta);
+  return solve_with(CsrOperator(lambda), preconditioner_, eta);
 }
 
 RecoveryResult StateRecovery::solve(const InformationMatrix& lambda, const Eigen::VectorXd& eta) {
@@ -319,10 +363,11 @@ RecoveryResult StateRecovery::solve(const InformationMatrix& lambda, const Eigen
   result.status = check_snapshot(lambda.dim(), eta.size());
   if (!result.status.ok()) return result;
   if (options_.mode == RecoveryMode::kDirect) return solve_direct(lambda.to_sparse(), eta);
+  if (options_.preconditioner == RecoveryPreconditioner::kFactor) return solve_factor(lambda, eta);
   if (options_.kernel == RecoveryKernel::kPacked) return solve_packed(lambda, eta);
   result.status = preconditioner_.factor(lambda);
   if (!result.status.ok()) return result;
-  return solve_with(InformationOperator(lambda), eta);
+  return solve_with(InformationOperator(lambda), preconditioner_, eta);
 }
 
 }  // namespace nav::core

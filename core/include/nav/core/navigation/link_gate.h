@@ -2,11 +2,11 @@
 // Camera links between delayed states (Eustice et al., RSS 2005 sec. IV): the gate and
 // linearisation of a registered pair (which pairs to propose: link_proposer.h).
 //
-// Gate: d² = νᵀ (H J Hᵀ + R)⁻¹ ν with ν = z − h(μ_i, μ_j) (angles wrapped), H = [H_j H_i] and
-// J = [Σ^_jj Σ^_ji; Σ^_ij Σ~_ii]: the proposal joint WITHOUT the truncation inflation ε I of
-// bounds.h (that isotropic term, in m² and rad² alike, is tens of degrees on the rotation rows
-// after a few PCG iterations and would let any outlier through; proposal keeps it so that no
-// pair is missed). Accepted when d² <= the 5-dof gate (chi_square.h).
+// Gate: d² = νᵀ S⁻¹ ν, S = H J Hᵀ + R, with ν = z − h(μ_i, μ_j) (angles wrapped), H = [H_j H_i]
+// and J the certified joint of the proposal (bounds.h: J >= the filter's true joint, PSD
+// difference, in the blocks' own units). S is factored by LLT: a non-positive pivot (S not
+// positive definite) rejects the link, so an indefinite S can never pass with a negative d².
+// Accepted when d² <= the 5-dof gate (chi_square.h).
 //
 // Linearisation: an accepted link is linearised at the iterated-EKF point of the robot (state i
 // held at its mean; link_linearisation.h), not at the possibly stale mean: after a camera-off
@@ -32,8 +32,11 @@ class LinkGate {
  public:
   LinkGate(double gate_chi2, WarningSink warn) : gate_chi2_(gate_chi2), warn_(std::move(warn)) {}
 
-  /// The joint without the truncation inflation: [Σ^_rr Σ^_ri; Σ^_ir Σ~_ii].
+  /// The joint the gate uses: the proposal's certified joint (bounds.h).
   static Eigen::MatrixXd gate_joint(const LinkProposal& proposal);
+  /// d² = νᵀ S⁻¹ ν by LLT of sym(S); false (d² untouched) when S is not positive definite or
+  /// not finite.
+  static bool mahalanobis_sq(const Eigen::Matrix<double, 5, 5>& S, const MeasVec& nu, double* d2);
   /// The gate at the means x0 = [x_j; x_i] with the joint covariance: fills the link's
   /// innovation and Mahalanobis distance; true when it passes.
   bool pass(const CameraRelativePoseModel& camera, const LinkPair& x0,

@@ -14,57 +14,40 @@
 // the filter's own marginal of i after the same measurement equals the update of the true joint,
 // later information only shrinks it. Everything here is in the filter's linearisation.
 //
-// Truncated CG breaks the premise: Σ^ (the CG estimate) may be smaller than Σ. We make the
-// bounds certified again from the TRUE residual of the recovered column (certify_truncation):
-//   X = Σ^_{*r} (n x d), R = E_r - Λ X, error E = Σ_{*r} - X = Λ⁻¹ R. For the rows of block j,
-//     ‖E_j‖₂ = ‖S_jᵀ Λ^{-1/2} · Λ^{-1/2} R‖₂ <= sqrt(λmax(Σ_jj)) · sqrt(λmax(Σ)) · ‖R‖₂
-//   (‖S_jᵀΛ^{-1/2}‖₂² = λmax(S_jᵀΛ⁻¹S_j) = λmax(Σ_jj), ‖Λ^{-1/2}R‖₂² <= λmax(Λ⁻¹)‖R‖₂²).
-//   λmax(Σ) needs no eigen-solve of Λ: for PSD Σ, λmax(Σ) <= Σ_j λmax(Σ_jj) (Cauchy-Schwarz on
-//   vᵀΣv = ‖Σ_j Σ^{1/2}S_j v_j‖²), and Σ_jj <= B_jj for our stored bounds B (the robot included).
-//   Hence, with L = Σ_j λmax(B_jj) and ρ any upper bound of the spectral norm ‖R‖₂ (the
-//   recovery reports ‖R‖₂ itself, RecoveryResult::column_residual_spectral; the Frobenius norm
-//   ‖R‖_F >= ‖R‖₂ is also valid, up to sqrt(d) looser),
-//     ε_j = sqrt(λmax(B_jj) · L) · ρ   bounds ‖E_j‖₂ for every block j.               (C1)
-//   Inflated joint for a proposal r <-> i:
-//     J~ = [sym(X_rr) + (ε_r + ε_i) I,  X_irᵀ ;  X_ir,  Σ~_ii + ε_i I].
-//   J~ - J = [ε_r I - E_rr, 0; 0, 0] + [ε_i I, -E_irᵀ; -E_ir, ε_i I] + [0 0; 0 Σ~_ii - Σ_ii],
-//   each term PSD (‖E_rr‖ <= ε_r, ‖E_ir‖ <= ε_i, induction), so J~ >= J and the argument above
-//   holds again. At insertion Σ~_ii = sym(X_rr) + ε_r I >= Σ_rr.
-//   L and every B_jj used in (C1) are frozen when the snapshot's recovery is handed in
-//   (set_recovery): a bound tightened by a link of this snapshot is not yet a bound of the
-//   snapshot's Σ. A state linked twice within one snapshot is proposed from its snapshot bound
-//   again and keeps the smaller-trace of the two (both are valid after both links).
-//   The robot bound B_rr is propagated through predictions (F B Fᵀ + Q, valid because
-//   Σ_rr' = F Σ_rr Fᵀ + Q) and replaced by sym(X_rr) + ε_r I whenever that has smaller trace.
-// Correlation-free fallback (certify_truncation only): (C1) is a worst-case bound that grows
-//   with the map (L sums over all states), so after a short CG budget the inflated joint can be
-//   far looser than needed. For any ω in (0, 1) and PSD [A B; Bᵀ C],
-//     [A B; Bᵀ C] <= blkdiag(A/ω, C/(1-ω))                 (covariance intersection)
-//   so blkdiag(B_rr/ω, Σ~_ii/(1-ω)) also bounds the true joint using only stored bounds. update()
-//   runs the Kalman update on the certified CG joint and on this joint for a few ω, and keeps
-//   the posterior block of smallest trace for Σ~_ii and for the robot bound B_rr (every
-//   candidate is >= the true posterior, so any choice is certified). Sequential links within a
-//   snapshot are fine: the fallback uses the current bounds, which hold after earlier links.
-// Measured limit (parking-garage, README): with a fixed budget of 5-40 PCG iterations the
-//   block-Jacobi PCG residual stays O(‖E_r‖) (relative residual 17-30) on this badly
-//   conditioned Λ, so ε_j exceeds the bounds themselves and every stored bound comes from the
-//   correlation-free fallback above; an exact recovery (--direct) gives log-det ratios of
-//   median 12.8 instead of 17.3. Tighter bounds under truncation need a faster-converging
-//   recovery (a better preconditioner), not a sharper form of (C1).
-// GUARANTEE (certify_truncation = true): if every state of the filter has a bound (insert() on
-// every augmentation), the prior bound of the robot is >= its covariance, and the residual norm
-// passed to set_recovery() is >= the true ‖E_r - Λ X‖₂ of the column handed to propose(), then
-// every stored Σ~_ii satisfies Σ~_ii - Σ_ii >= 0 up to rounding, whatever the CG budget. A large
-// residual makes the bounds loose, never over-confident. With certify_truncation = false this is
-// the paper's Algorithm 1 as published (ε = 0), conservative only for an exact recovery.
+// Truncated CG breaks the premise (Σ^ may be smaller than Σ); certify_truncation restores it
+// from the TRUE residual R = E_r - Λ X of the recovered column X = Σ^_{*r} (n x d). The error
+// E = Σ_{*r} - X = Σ R; with W = B_rr >= Σ_rr and B_ii >= Σ_ii, for the rows E_i of block i
+//   ‖B_ii^-½ E_i W^-½‖₂ <= ‖Σ^½ R W^-½‖₂ =: κ̄,   κ̄² = λmax(W^-½ Rᵀ Σ R W^-½),
+// and Rᵀ Σ R is bounded without Λ⁻¹ by (K1) L RᵀR, L = Σ_j λmax(B_jj) >= λmax(Σ), or (K2)
+// n Σ_j R_jᵀ B_jj R_j (n blocks; D = blkdiag(B_jj) has λmax(D^-½ Σ D^-½) <= n). κ = the
+// square root of the smaller: a factor on the blocks themselves, no m² added to rad². The
+// certified joint of a proposal r <-> i is
+//   J~ = [sym(X_rr) + 2κ W,  X_irᵀ ;  X_ir,  (1 + κ) Σ~_ii]  >=  J  (PSD difference),
+// whatever the residual (derivation: docs/consistency.md "The certificate"); the robot bound
+// becomes sym(X_rr) + κ W when that has smaller trace. κ, W, L and the B_jj are frozen at
+// set_recovery: a bound tightened by a link of this snapshot is not a bound of its Σ; a state
+// linked twice within one snapshot is proposed from its snapshot bound again and keeps the
+// smaller-trace result. B_rr follows predictions (F B Fᵀ + Q).
+// Exact refresh (refresh_exact): the ESDF's Λ only gains PSD terms (augmentation keeps every
+// delayed state's marginal, updates add Hᵀ R⁻¹ H), so an exact marginal Σ_ii(t) (selected
+// inversion) plus a rounding margin bounds Σ_ii for all later t; Algorithm 1 tightens from it.
+// Correlation-free fallback: for PSD [A B; Bᵀ C] and ω in (0, 1), [A B; Bᵀ C] <=
+// blkdiag(A/ω, C/(1-ω)) (covariance intersection); update() also updates blkdiag(B_rr/ω,
+// Σ~_ii/(1-ω)) for a few ω and keeps the smallest-trace posterior (all are certified).
+// GUARANTEE (certify_truncation): if every state has a bound (insert() on every augmentation),
+// the robot's prior bound is >= its covariance and the residual handed to set_recovery is the
+// true one (or ρ >= its spectral norm), every Σ~_ii - Σ_ii is PSD up to rounding, whatever the
+// CG budget. Without it: the paper's Algorithm 1 (κ = 0), conservative for exact recovery only.
 //
-// Costs: every call is O(block_dim³) and independent of the map size (λmax of one block by a
-// self-adjoint eigen-solve, L kept as a running sum). Not thread-safe (recovery thread).
+// Costs: O(block_dim³) per call, independent of the map size, except set_recovery with the
+// residual matrix (K2: O(n block_dim³)) and refresh_exact (O(n block_dim³)), once per image.
+// Not thread-safe (recovery thread).
 
 #include <Eigen/Core>
-
+#include <functional>
 #include <vector>
 
+#include "nav/core/recovery/exact_marginals.h"
 #include "nav/core/status.h"
 
 namespace nav::core {
@@ -73,14 +56,18 @@ struct BoundsOptions {
   /// Inflate by the certified error of a truncated recovery (see the file comment). false =
   /// the paper's uninflated Algorithm 1 (for measuring what truncation does to it).
   bool certify_truncation = true;
+  /// refresh_exact: Σ~ = (1 + τ) Σ + τ diag(Σ) over the exact marginal Σ (rounding of the
+  /// selected inversion, relative to each variance's own scale).
+  double exact_refresh_margin = 1e-8;
 };
 
 /// The joint used for a link proposal between the robot r and state i (paper eq. 6).
 struct LinkProposal {
   int state = -1;            ///< i
-  Eigen::MatrixXd joint;     ///< 2d x 2d [Σ_rr Σ_ri; Σ_ir Σ~_ii], inflated when certifying
-  double epsilon_robot = 0;  ///< ε_r used (0 when not certifying)
-  double epsilon_state = 0;  ///< ε_i used
+  Eigen::MatrixXd joint;     ///< 2d x 2d [Σ_rr Σ_ri; Σ_ir Σ~_ii], certified (file comment)
+  double epsilon_robot = 0;  ///< always 0: the isotropic ε I is replaced by κ (kept for source
+  double epsilon_state = 0;  ///< compatibility of callers)
+  double kappa = 0;          ///< κ of the certified joint (0 when not certifying)
 };
 
 class CovarianceBounds {
@@ -110,16 +97,24 @@ class CovarianceBounds {
   /// Inserts delayed state i with the robot's current bound (an augmentation without prediction).
   Status insert(int state);
 
-  /// Hands in the recovery of this snapshot: sym(Σ^_rr) and an upper bound of the true
+  /// Hands in the recovery of this snapshot: sym(Σ^_rr) and an upper bound ρ of the true
   /// residual's spectral norm ‖E_r - ΛX‖₂ of the covariance columns (column_residual_spectral;
-  /// the Frobenius norm is valid too, looser). The parameter name is historical.
-  /// `num_states` is the filter's number of blocks: every non-robot block must have a bound (kInvalidArgument otherwise: the certificate would be void).
-  /// Computes ε_r and tightens the robot bound (certifying) or sets it to Σ^_rr (not certifying).
+  /// the Frobenius norm is valid too, looser): κ by (K1) with RᵀR <= ρ² I.
+  /// `num_states` is the filter's number of blocks: every non-robot block must have a bound
+  /// (kInvalidArgument otherwise: the certificate would be void). Computes κ and tightens the
+  /// robot bound (certifying) or sets it to Σ^_rr (not certifying).
   Status set_recovery(const Eigen::MatrixXd& sigma_rr, double residual_frobenius, int num_states);
+  /// Same with the true residual matrix R = E_r - ΛX (n x d, StateRecovery::column_residual()):
+  /// κ by the smaller of (K1) and (K2).
+  Status set_recovery(const Eigen::MatrixXd& sigma_rr,
+                      const Eigen::Ref<const Eigen::MatrixXd>& residual, int num_states);
+  /// κ of the last set_recovery (0 when not certifying).
+  double kappa() const { return kappa_; }
 
-  /// Certified error radius ε_j of the recovered rows of a block whose covariance is bounded
-  /// by a matrix with largest eigenvalue lambda_max_block (formula C1); 0 when not certifying.
-  double epsilon(double lambda_max_block) const;
+  /// Resets every bound (the robot's too) to the exact marginal of the current Λ plus the
+  /// rounding margin (file comment). Call before set_recovery of the same Λ. kInvalidArgument
+  /// if the marginals' blocks do not match the filter's `num_states` or a state has no bound.
+  Status refresh_exact(const ExactMarginals& exact, int num_states);
 
   /// The joint for a proposal between the robot and state i, from the recovered cross
   /// covariance Σ^_ir (rows of block i of the robot column). kUnknownState if i has no bound.
@@ -174,6 +169,10 @@ class CovarianceBounds {
   static bool joseph(const Eigen::MatrixXd& joint, const Eigen::MatrixXd& H,
                      const Eigen::MatrixXd& R, Eigen::MatrixXd* posterior);
   void set_robot_bound(const Eigen::MatrixXd& bound);
+  /// set_recovery's common part; kappa_squared(W) returns an upper bound of κ̄².
+  Status set_recovery_with(const Eigen::MatrixXd& sigma_rr, double residual_frobenius,
+                           int num_states,
+                           const std::function<double(const Eigen::MatrixXd&)>& kappa_squared);
 
   int block_dim_;
   BoundsOptions options_;
@@ -184,12 +183,15 @@ class CovarianceBounds {
   double robot_lambda_max_ = 0.0;
   Eigen::MatrixXd sigma_rr_hat_;
   double residual_frobenius_ = 0.0;
-  double epsilon_robot_ = 0.0;
+  double kappa_ = 0.0;
+  Eigen::MatrixXd certificate_robot_bound_;  // W: the robot bound frozen at set_recovery
   double certificate_lambda_ = 0.0;  // L frozen at set_recovery
   long epoch_ = 0;                   // incremented by set_recovery
 };
 
 /// λmax of a symmetric matrix (self-adjoint eigen-solve; for small blocks).
 double lambda_max_symmetric(const Eigen::MatrixXd& m);
+/// λmax(W^-½ G W^-½) for symmetric G and SPD W (generalised eigen-solve); +inf if it fails.
+double lambda_max_scaled(const Eigen::MatrixXd& G, const Eigen::MatrixXd& W);
 
 }  // namespace nav::core

@@ -86,6 +86,12 @@ class ExactMarginals {
   /// O(nnz(L) d)), and S_ab is read from X. Either way the result is exact.
   Eigen::MatrixXd joint(int a, int b) const;
 
+  /// X = Lambda⁻¹ B with the factor (two supernodal triangular solves, O(nnz(L) m) for an
+  /// n x m B; no allocation after the first call with a given m): the preconditioner of
+  /// recovery/factor_preconditioner.h. Throws ExactMarginalsError on a size mismatch (naming
+  /// both sizes) or a CHOLMOD failure. Uses the CHOLMOD workspace (not thread-safe).
+  void solve(const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::Ref<Eigen::MatrixXd> X) const;
+
   /// True when every entry of the off-diagonal block (a, b) lies in the pattern of L, i.e.
   /// joint(a, b) needs no solve.
   bool in_pattern(int a, int b) const;

@@ -72,8 +72,18 @@ class InformationOperator final : public SpdOperator {
   const InformationMatrix& lambda_;
 };
 
+/// A symmetric positive definite preconditioner: Z = M⁻¹ R.
+class Preconditioner {
+ public:
+  virtual ~Preconditioner() = default;
+  virtual Eigen::Index dim() const = 0;
+  /// Z = M⁻¹ R (R and Z are dim() x m, no aliasing).
+  virtual void apply(const Eigen::Ref<const Eigen::MatrixXd>& R,
+                     Eigen::Ref<Eigen::MatrixXd> Z) const = 0;
+};
+
 /// Block-Jacobi preconditioner: Z = M^-1 R with M the block diagonal of Λ.
-class BlockJacobiPreconditioner {
+class BlockJacobiPreconditioner final : public Preconditioner {
  public:
   /// Inverts the diagonal blocks of a CSR snapshot. kNotPositiveDefinite names the first block
   /// whose Cholesky factorisation fails; kInvalidArgument if the size is not a multiple of
@@ -84,10 +94,11 @@ class BlockJacobiPreconditioner {
 
   int block_dim() const { return block_dim_; }
   int num_blocks() const { return static_cast<int>(inverse_blocks_.size()); }
-  Eigen::Index dim() const { return Eigen::Index{num_blocks()} * block_dim_; }
+  Eigen::Index dim() const override { return Eigen::Index{num_blocks()} * block_dim_; }
 
   /// Z = M^-1 R (R and Z are dim() x m).
-  void apply(const Eigen::Ref<const Eigen::MatrixXd>& R, Eigen::Ref<Eigen::MatrixXd> Z) const;
+  void apply(const Eigen::Ref<const Eigen::MatrixXd>& R,
+             Eigen::Ref<Eigen::MatrixXd> Z) const override;
 
  private:
   Status invert_block(int index, const Eigen::Ref<const Eigen::MatrixXd>& block);
@@ -134,7 +145,7 @@ struct PcgWorkspace {
 
 /// Solves A X = B by multi-RHS PCG. X holds the warm start on entry and the solution on exit.
 /// A, M, B and X must agree in size (kInvalidArgument otherwise, X untouched).
-PcgSummary solve_pcg(const SpdOperator& A, const BlockJacobiPreconditioner& M,
+PcgSummary solve_pcg(const SpdOperator& A, const Preconditioner& M,
                      const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::Ref<Eigen::MatrixXd> X,
                      const PcgOptions& options, PcgWorkspace& workspace);
 

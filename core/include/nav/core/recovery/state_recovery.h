@@ -19,23 +19,20 @@
 // F = I, Q = 0 of the last rule: its rows equal the robot's (extend_for_augmentation).
 // Σ_tt is symmetrised before use (a truncated CG column is not exactly symmetric).
 //
-// Modes: a fixed number of PCG iterations per step (the paper's real-time mode; the result is
-// approximate, the residual says how much), PCG to a relative-residual tolerance OR an
-// iteration cap per step (max_iterations), and a direct CHOLMOD solve (reference). Reaching the
-// cap is NOT an error: on a badly conditioned Λ (parking-garage: condition number ~2e14, ~1e9
-// block-Jacobi preconditioned) PCG may stagnate far above a tight tolerance. The solve then
-// returns ok with hit_iteration_cap set and the residual it reached; the certified bounds
-// (bounds.h) take that residual as input and stay conservative whatever its size (only looser). Every solve reports the relative residual of each column and the
-// Frobenius norm of the true residual of the covariance columns, which the covariance bounds
-// (bounds.h) turn into a certified error bound.
+// Modes: a fixed number of PCG iterations per step (the paper's real-time mode; the residual
+// says how approximate), PCG to a relative-residual tolerance or an iteration cap per step,
+// and a direct CHOLMOD solve (reference). Reaching the cap is NOT an error (block-Jacobi PCG
+// stagnates on badly conditioned Λ): the result carries hit_iteration_cap and the residual,
+// from which the certified bounds (bounds.h) stay conservative (only looser). Preconditioners:
+// block Jacobi, or a Cholesky factor of Λ refreshed every few steps (factor_preconditioner.h).
 //
 // Not thread-safe: owned by the recovery thread. No clocks (time it from the caller).
 
 #include <Eigen/Core>
-
 #include <vector>
 
 #include "nav/core/filter/information_matrix.h"
+#include "nav/core/recovery/factor_preconditioner.h"
 #include "nav/core/recovery/packed_pcg.h"
 #include "nav/core/recovery/pcg.h"
 #include "nav/core/status.h"
@@ -64,6 +61,15 @@ enum class RecoveryKernel {
 
 const char* to_string(RecoveryKernel kernel);
 
+/// Preconditioner of the PCG modes on the filter's block matrix (CSR snapshots: block Jacobi).
+enum class RecoveryPreconditioner {
+  kBlockJacobi,  ///< blkdiag(Λ_ii) (with `kernel`)
+  kFactor,       ///< Cholesky of Λ at a refresh + block Jacobi on newer states
+                 ///< (factor_preconditioner.h); generic kernel; refresh policy below
+};
+
+const char* to_string(RecoveryPreconditioner preconditioner);
+
 struct StateRecoveryOptions {
   RecoveryMode mode = RecoveryMode::kFixedIterations;
   /// kFixedIterations: PCG iterations per step, >= 0 (0 = only re-evaluate the warm start).
@@ -80,7 +86,14 @@ struct StateRecoveryOptions {
   /// result elsewhere (NavFilter's recovery thread: the filter evaluates the true residual of
   /// the extended result on its current Λ before the bounds use it).
   bool recompute_true_residual = true;
-
+  RecoveryPreconditioner preconditioner = RecoveryPreconditioner::kFactor;
+  /// kFactor: refactor before a solve when `refresh_interval` solves (>= 1) used the factor, or
+  /// when the previous solve left a covariance-column relative residual above
+  /// `refresh_residual` (> 0). 1: every solve refactors, so a solve depends only on Λ, η and
+  /// the warm start (a checkpointed or copied recovery continues bit-identically; a copy
+  /// carries no factor and refactors at its first solve).
+  int refresh_interval = 1;
+  double refresh_residual = 1e-6;
   Status validate() const;
 };
 
@@ -94,15 +107,13 @@ struct RecoveryResult {
   double mean_relative_residual = 0.0;   ///< ‖η - Λμ‖ / ‖η‖
   double column_relative_residual = 0.0; ///< max_c ‖e_c - Λσ_c‖ / ‖e_c‖ over the Σ_{*r} columns
   double max_relative_residual = 0.0;    ///< max of the two above
-  /// ‖E_r - Λ Σ̂_{*r}‖_F, the true residual of the covariance columns (input of the certified
-  /// error bound in bounds.h).
-  double column_residual_frobenius = 0.0;
+  double column_residual_frobenius = 0.0;  ///< ‖E_r - Λ Σ̂_{*r}‖_F (certificate, bounds.h)
   /// ‖E_r - Λ Σ̂_{*r}‖₂ (largest singular value; <= the Frobenius norm, up to sqrt(block_dim)
   /// times smaller), every mode: the tighter input of the same certificate (bounds.h).
   double column_residual_spectral = 0.0;
-  /// Diagonal blocks whose preconditioner inverse was recomputed (all of them except with the
-  /// packed kernel, which re-inverts only changed blocks).
-  int refactored_blocks = 0;
+  int refactored_blocks = 0;  ///< preconditioner blocks re-inverted (packed: changed only)
+  /// kFactor: this solve refactored Λ (StateRecovery::refreshed_marginals() are of this Λ).
+  bool refreshed = false;
 };
 
 class StateRecovery {
@@ -148,9 +159,16 @@ class StateRecovery {
   Eigen::MatrixXd robot_covariance() const;
   /// Σ_{i r} (rows of block i of the robot column), block_dim x block_dim.
   Eigen::MatrixXd cross_covariance(int block) const;
+  /// E_r − Λ Σ^_{*r} of the last solve (n x block_dim; recurrence residual when
+  /// recompute_true_residual is off): the scaled certificate's input (bounds.h).
+  const Eigen::MatrixXd& column_residual() const { return column_residual_; }
+  /// kFactor: exact marginals of the last refresh's Λ (null before the first).
+  const ExactMarginals* refreshed_marginals() const { return factor_.marginals(); }
 
  private:
-  RecoveryResult solve_with(const SpdOperator& A, const Eigen::VectorXd& eta);
+  RecoveryResult solve_with(const SpdOperator& A, const Preconditioner& M,
+                            const Eigen::VectorXd& eta);
+  RecoveryResult solve_factor(const InformationMatrix& lambda, const Eigen::VectorXd& eta);
   RecoveryResult solve_packed(const InformationMatrix& lambda, const Eigen::VectorXd& eta);
   PcgOptions pcg_options() const;
   void note_convergence(RecoveryResult& result, const PcgSummary& summary) const;
@@ -173,6 +191,10 @@ class StateRecovery {
   PackedBlockJacobi packed_preconditioner_;
   PackedPcgWorkspace packed_workspace_;
   std::vector<double> packed_rhs_, packed_solution_;
+  Eigen::MatrixXd column_residual_;
+  FactorPreconditioner factor_;
+  int solves_since_refresh_ = 0;
+  double last_column_residual_ = 0.0;
 };
 
 }  // namespace nav::core

@@ -134,7 +134,9 @@ void CovarianceBounds::serialize(Archive& ar, int num_filter_blocks) {
   ar.matrix(sigma_rr_hat_, di, di, true, "recovered Σ_rr");
   ar(residual_frobenius_, "residual");
   ar.check(residual_frobenius_ >= 0, "negative recovery residual");
-  ar(epsilon_robot_, "ε_r");
+  ar(kappa_, "κ");
+  ar.check(kappa_ >= 0, "negative certificate κ");
+  ar.matrix(certificate_robot_bound_, di, di, true, "certificate robot bound W");
   ar(certificate_lambda_, "certificate L");
   ar(lambda_sum_, "Σ λmax");
   ar(epoch_, "epoch");

@@ -1,0 +1,143 @@
+// The scaled certificate of the covariance bounds (recovery/bounds.h, K1/K2) against dense
+// inverses: for random SPD Λ, exact marginal bounds and recovered columns with random errors of
+// every size, the certified proposal joint dominates the exact joint (PSD difference), and the
+// exact refresh resets every bound to the exact marginal plus the rounding margin.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+
+#include <random>
+
+#include "nav/core/recovery/bounds.h"
+#include "nav/core/recovery/consistency.h"
+#include "nav/core/recovery/exact_marginals.h"
+
+namespace nav::core {
+namespace {
+
+struct Problem {
+  int d = 6;
+  int blocks = 6;
+  Eigen::MatrixXd lambda, sigma;
+};
+
+/// SPD Λ with badly scaled units: positions ~1e2 m², angles ~1e-6 rad² in Σ.
+Problem make_problem(unsigned seed) {
+  Problem p;
+  const int n = p.d * p.blocks;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> normal;
+  Eigen::MatrixXd A(n, n);
+  for (int i = 0; i < A.size(); ++i) A(i) = normal(rng);
+  Eigen::VectorXd scale(n);
+  for (int i = 0; i < n; ++i) scale[i] = (i % p.d) < 3 ? 10.0 : 1e-3;
+  const Eigen::MatrixXd sigma0 = A * A.transpose() / n + 0.1 * Eigen::MatrixXd::Identity(n, n);
+  p.sigma = scale.asDiagonal() * sigma0 * scale.asDiagonal();
+  p.lambda = p.sigma.inverse();
+  p.lambda = 0.5 * (p.lambda + p.lambda.transpose()).eval();
+  p.sigma = p.lambda.inverse();
+  return p;
+}
+
+/// Bounds whose every block is the exact marginal (refresh_exact of the dense Λ).
+CovarianceBounds exact_bounds(const Problem& p) {
+  CovarianceBounds bounds(p.d);
+  EXPECT_TRUE(bounds.initialize_robot(p.sigma.topLeftCorner(p.d, p.d)).ok());
+  for (int i = 1; i < p.blocks; ++i) EXPECT_TRUE(bounds.insert(i).ok());
+  const Eigen::SparseMatrix<double> sparse = p.lambda.sparseView();
+  EXPECT_TRUE(bounds.refresh_exact(ExactMarginals::compute(sparse, p.d), p.blocks).ok());
+  return bounds;
+}
+
+Eigen::MatrixXd exact_joint(const Problem& p, int i) {
+  const int d = p.d;
+  Eigen::MatrixXd J(2 * d, 2 * d);
+  J << p.sigma.block(0, 0, d, d), p.sigma.block(0, i * d, d, d), p.sigma.block(i * d, 0, d, d),
+      p.sigma.block(i * d, i * d, d, d);
+  return J;
+}
+
+TEST(BoundsCertificate, CertifiedJointDominatesTheExactJointForRandomResiduals) {
+  int checked = 0;
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const Problem p = make_problem(seed);
+    const int n = p.d * p.blocks;
+    std::mt19937 rng(100 + seed);
+    std::normal_distribution<double> normal;
+    for (double error : {1e-9, 1e-5, 1e-2, 1.0, 100.0}) {
+      // X = exact column + an error in the column's own scale (relative `error`).
+      Eigen::MatrixXd X = p.sigma.leftCols(p.d);
+      for (int r = 0; r < n; ++r) {
+        for (int c = 0; c < p.d; ++c) {
+          X(r, c) += error * std::sqrt(p.sigma(r, r) * p.sigma(c, c)) * normal(rng);
+        }
+      }
+      Eigen::MatrixXd E_r = Eigen::MatrixXd::Zero(n, p.d);
+      E_r.topRows(p.d).setIdentity();
+      const Eigen::MatrixXd R = E_r - p.lambda * X;
+      for (bool matrix_certificate : {true, false}) {
+        CovarianceBounds bounds = exact_bounds(p);
+        const Eigen::MatrixXd X_rr = X.topRows(p.d);
+        const Status s =
+            matrix_certificate
+                ? bounds.set_recovery(X_rr, R, p.blocks)
+                : bounds.set_recovery(X_rr, Eigen::JacobiSVD<Eigen::MatrixXd>(R).singularValues()[0],
+                                      p.blocks);
+        ASSERT_TRUE(s.ok()) << s.to_string();
+        EXPECT_TRUE(is_conservative(bounds.robot_bound(), p.sigma.topLeftCorner(p.d, p.d), 1e-9));
+        for (int i = 1; i < p.blocks; ++i) {
+          LinkProposal proposal;
+          ASSERT_TRUE(bounds.propose(i, X.middleRows(i * p.d, p.d), &proposal).ok());
+          double min_eig = 0.0;
+          EXPECT_TRUE(is_conservative(proposal.joint, exact_joint(p, i), 1e-9, &min_eig))
+              << "seed " << seed << " error " << error << " state " << i << " matrix "
+              << matrix_certificate << " κ " << bounds.kappa() << " min eig " << min_eig;
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(checked, 3 * 5 * 2 * 5);
+}
+
+TEST(BoundsCertificate, KappaVanishesWithTheResidualAndK2BeatsK1OnMixedUnits) {
+  const Problem p = make_problem(7);
+  const int n = p.d * p.blocks;
+  Eigen::MatrixXd X = p.sigma.leftCols(p.d);
+  X.array() *= 1.0 + 1e-9;  // a relative error of 1e-9
+  Eigen::MatrixXd E_r = Eigen::MatrixXd::Zero(n, p.d);
+  E_r.topRows(p.d).setIdentity();
+  const Eigen::MatrixXd R = E_r - p.lambda * X;
+  CovarianceBounds with_matrix = exact_bounds(p), with_norm = exact_bounds(p);
+  ASSERT_TRUE(with_matrix.set_recovery(X.topRows(p.d), R, p.blocks).ok());
+  const double rho = Eigen::JacobiSVD<Eigen::MatrixXd>(R).singularValues()[0];
+  ASSERT_TRUE(with_norm.set_recovery(X.topRows(p.d), rho, p.blocks).ok());
+  EXPECT_GT(with_matrix.kappa(), 0.0);
+  EXPECT_LT(with_matrix.kappa(), 1e-6);
+  // K1 sums λmax over m² and rad² blocks alike: it is orders of magnitude looser here.
+  EXPECT_LT(100.0 * with_matrix.kappa(), with_norm.kappa());
+  // A zero residual certifies the recovered column as it is.
+  CovarianceBounds exact = exact_bounds(p);
+  ASSERT_TRUE(exact.set_recovery(X.topRows(p.d), Eigen::MatrixXd::Zero(n, p.d), p.blocks).ok());
+  EXPECT_EQ(exact.kappa(), 0.0);
+  // A residual of the wrong shape is refused.
+  EXPECT_EQ(exact.set_recovery(X.topRows(p.d), Eigen::MatrixXd::Zero(n - 1, p.d), p.blocks).code(),
+            StatusCode::kInvalidArgument);
+}
+
+TEST(BoundsCertificate, ExactRefreshIsTheMarginalPlusTheMargin) {
+  const Problem p = make_problem(5);
+  CovarianceBounds bounds = exact_bounds(p);
+  for (int i = 1; i < p.blocks; ++i) {
+    const Eigen::MatrixXd sigma_ii = p.sigma.block(i * p.d, i * p.d, p.d, p.d);
+    EXPECT_TRUE(is_conservative(bounds.bound(i), sigma_ii, 0.0)) << "state " << i;
+    EXPECT_LT(logdet_ratio(bounds.bound(i), sigma_ii), 1e-6) << "state " << i;
+  }
+  // Marginals of a differently sized filter are refused.
+  const Eigen::SparseMatrix<double> sparse = p.lambda.sparseView();
+  EXPECT_EQ(bounds.refresh_exact(ExactMarginals::compute(sparse, p.d), p.blocks + 1).code(),
+            StatusCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace nav::core
