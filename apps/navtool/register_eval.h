@@ -5,7 +5,7 @@
 // Per pair (i, j) of frames whose true footprints overlap:
 //   prior: the true relative pose of camera j in camera i plus a draw from the stated 6x6
 //          covariance P (so the prior is exactly consistent with P), the scene depth of the
-//          flat floor below camera i with a stated sigma;
+//          seafloor below camera i (the dive's height field) with a stated sigma;
 //   registration (nav_vision, pose-constrained search with that prior);
 //   errors against the true 5-DOF measurement z_true: rotation angle, baseline direction
 //   angle, NEES = (z - z_true)^T C^-1 (z - z_true) with C the registration's covariance;
