@@ -100,6 +100,7 @@ PairEval evaluate_pair(const vision::Registration& registration, const vision::I
     const Vec5 err = vision::z_minus(z, z_true);
     e.nees = err.dot(e.result.covariance.ldlt().solve(err));
   }
+  if (!o.fig4) return e;
   // Fig. 4: the same prior mean, three covariances.
   const vision::CameraIntrinsics& camera = registration.camera();
   const vision::PccsOptions& pccs = registration.options().pccs;

@@ -29,6 +29,7 @@ struct PairEvalOptions {
   double bound_inflation = 2.0;   ///< (b): covariance multiplier of the conservative bound
   double overconfidence = 10.0;   ///< (c): covariance divisor of the over-confident prior
   double max_true_error_px = 1.5; ///< a true correspondence reprojects this close in image j
+  bool fig4 = true;               ///< count the Fig. 4 band misses (an unconstrained search more)
   std::uint64_t seed = 1;
 };
 
