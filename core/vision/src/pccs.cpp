@@ -44,6 +44,38 @@ double segment_distance2(const Eigen::Vector2d& q, const Eigen::Vector2d& a,
   return r.dot(M * r);
 }
 
+/// Sub-segment k of a region with the per-segment parts of segment_distance2 precomputed for
+/// both end metrics, so a candidate costs two clamped projections (same result as
+/// SearchRegion::segment_mahalanobis2).
+struct SegmentTest {
+  Eigen::Vector2d a, d;
+  Eigen::Matrix2d M[2];
+  Eigen::Vector2d Md[2];
+  double dMd[2];
+
+  SegmentTest(const SearchRegion& region, std::size_t k) {
+    const std::size_t k1 = std::min(k + 1, region.centres_px.size() - 1);
+    a = region.centres_px[k];
+    d = region.centres_px[k1] - a;
+    M[0] = region.informations_px2[k];
+    M[1] = region.informations_px2[k1];
+    for (int m = 0; m < 2; ++m) {
+      Md[m] = M[m] * d;
+      dMd[m] = d.dot(Md[m]);
+    }
+  }
+  double distance2(const Eigen::Vector2d& q) const {
+    const Eigen::Vector2d e = a - q;
+    double best = kInf;
+    for (int m = 0; m < 2; ++m) {
+      const double s = dMd[m] > 0.0 ? std::clamp(-e.dot(Md[m]) / dMd[m], 0.0, 1.0) : 0.0;
+      const Eigen::Vector2d r = e + s * d;
+      best = std::min(best, r.dot(M[m] * r));
+    }
+    return best;
+  }
+};
+
 /// Everything of the transfer that depends on the pair only (computed once per pair).
 class PointTransfer {
  public:
@@ -298,6 +330,17 @@ PutativeMatches match_pose_constrained(const ImageFeatures& i, const ImageFeatur
   for (std::size_t a = 0; a < i.size(); ++a) {
     transfer.region(i.points_px[a], region);
     const std::size_t n = region.centres_px.size();
+    if (n == 0) continue;
+    // Every centre lies on the epipolar line of u_i (the transfer of one ray), and every
+    // ellipse within sqrt(g trace S_k) of its centre: candidates farther from the line than
+    // the largest such radius cannot be in the region (a cheap test before the exact one).
+    Eigen::Vector2d normal = Eigen::Vector2d::Zero();
+    double max_radius2 = 0.0;
+    for (const auto& S : region.covariances_px2) max_radius2 = std::max(max_radius2, S.trace());
+    max_radius2 *= region.gate_chi2;
+    const Eigen::Vector2d along = region.centres_px.back() - region.centres_px.front();
+    if (along.norm() > 1e-9) normal = Eigen::Vector2d(-along.y(), along.x()) / along.norm();
+    const double offset = normal.dot(region.centres_px.front());
     for (std::size_t k = 0; k < region.segments(); ++k) {
       const std::size_t k1 = std::min(k + 1, n - 1);
       const auto& S0 = region.covariances_px2[k];
@@ -306,6 +349,7 @@ PutativeMatches match_pose_constrained(const ImageFeatures& i, const ImageFeatur
                                  std::sqrt(region.gate_chi2 * std::max(S0(1, 1), S1(1, 1))));
       const Eigen::Vector2d lo = region.centres_px[k].cwiseMin(region.centres_px[k1]) - half;
       const Eigen::Vector2d hi = region.centres_px[k].cwiseMax(region.centres_px[k1]) + half;
+      const SegmentTest segment(region, k);
       // A candidate is tested against this sub-segment only; it is marked when accepted, so a
       // point inside several sub-segments is compared once and one outside this sub-segment
       // is still tested against the others (the region is their union).
@@ -313,7 +357,9 @@ PutativeMatches match_pose_constrained(const ImageFeatures& i, const ImageFeatur
         if (accepted[b] == static_cast<int>(a)) return;
         const Eigen::Vector2d& q = j.points_px[b];
         if ((q.array() < lo.array()).any() || (q.array() > hi.array()).any()) return;
-        if (!(region.segment_mahalanobis2(k, q) <= region.gate_chi2)) return;
+        const double across = normal.dot(q) - offset;
+        if (across * across > max_radius2) return;
+        if (!(segment.distance2(q) <= region.gate_chi2)) return;
         accepted[b] = static_cast<int>(a);
         ++out.descriptor_comparisons;
         acc.add(static_cast<int>(a), b,

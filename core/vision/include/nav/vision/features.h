@@ -5,8 +5,8 @@
 //
 // Harris corners (Harris & Stephens, Alvey Vision Conference 1988) are scored by the corner
 // response and thinned by a minimum distance (Shi & Tomasi's selection, as OpenCV's
-// goodFeaturesToTrack); they are described upright at a fixed support size, which suits a
-// downward-looking survey camera whose heading changes little between overlapping frames.
+// goodFeaturesToTrack); they are described at a fixed support size, oriented along their
+// dominant gradient (or upright, an option).
 // Descriptors are RootSIFT (Arandia & Zisserman, CVPR 2012: L1-normalise, square root), which
 // makes the Euclidean distance a Hellinger kernel and matches more reliably than raw SIFT.
 
@@ -28,10 +28,19 @@ struct FeatureOptions {
   /// wide (OpenCV SIFT), so 16 px describes a ~96 px patch (on Sparus, sizes 7/12/16 gave
   /// median rotation errors 0.67/0.59/0.53 deg).
   float harris_descriptor_size_px = 16.0f;
+  /// Describe each corner at its dominant gradient orientation (Lowe's orientation
+  /// assignment) instead of upright: overlapping survey frames from adjacent track lines are
+  /// taken on opposite headings, which upright descriptors cannot match.
+  bool harris_rotation_invariant = false;
   bool use_sift = true;
   int max_sift = 1500;                    ///< Strongest SIFT keypoints kept (0 = all).
   double sift_contrast_threshold = 0.03;  ///< Lowe's DoG contrast threshold.
   bool root_sift = true;                  ///< RootSIFT descriptors.
+  /// SIFT detection and all descriptors run on the image halved until it is no wider than
+  /// this (0 = full resolution); Harris corners are still located at full resolution. SIFT
+  /// upsamples its input 2x for its first octave, so a halved 1280 px frame is still analysed
+  /// at the full resolution's pixel scale, at a quarter of the cost.
+  int max_description_width_px = 800;
 };
 
 /// Detects and describes features on a preprocessed 8-bit grey image. When `image_is_ideal`

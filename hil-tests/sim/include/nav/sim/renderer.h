@@ -5,7 +5,8 @@
 // the bilinear surface); the seafloor's albedo is a seeded multi-scale value-noise texture
 // (sediment, brighter rocks and debris tops); a strobe beside the camera lights it with
 // Lambert shading, inverse-square falloff and exponential attenuation in sea water along
-// strobe -> seafloor -> camera; cos^4 vignetting; shot and read noise; 12 significant bits.
+// strobe -> seafloor -> camera; backscatter of the strobe light by the water along each ray
+// (single scattering); cos^4 vignetting; shot and read noise; 12 significant bits.
 
 #include <cstdint>
 #include <opencv2/core.hpp>
@@ -20,7 +21,8 @@ namespace nav::sim {
 struct RenderOptions {
   core::Vec3 strobe_in_camera_m{0.0, -0.8, 0.0};  ///< strobe 0.8 m "up" in the image (aft)
   double attenuation_per_m = 0.25;                ///< sea-water extinction coefficient, 1/m
-  double target_counts = 1500.0;                  ///< auto exposure: mean-albedo floor at the nadir
+  double target_counts = 1500.0;                  ///< auto exposure: mean of the central half
+  double backscatter_per_m_sr = 1.5e-4;  ///< volume scattering function at 180 deg, 1/(m sr)
   double read_noise_counts = 3.0;                 ///< 1 sigma
   double counts_per_electron = 0.25;              ///< shot noise: sqrt(signal / gain) electrons
   int thumbnail_width_px = 160;
@@ -40,6 +42,9 @@ class Renderer {
 
  private:
   double value_noise(double x, double y, std::uint64_t octave_seed) const;
+  /// Backscattered strobe light per pixel (CV_32F counts) for a floor range_m away.
+  cv::Mat backscatter(const core::Vec3& p_cam, const core::Mat3& R_world_cam,
+                      const core::Vec3& p_strobe, double range_m, double exposure) const;
 
   CameraGeometry camera_;
   const Seafloor* seafloor_;

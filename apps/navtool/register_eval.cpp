@@ -1,0 +1,122 @@
+// Per-pair evaluation of `navtool register-eval` against the truth (register_eval.h).
+#include "navtool/register_eval.h"
+
+#include <Eigen/Cholesky>
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "nav/core/geometry/rotation.h"
+#include "nav/vision/camera_model.h"
+#include "nav/vision/essential.h"
+#include "nav/vision/matching.h"
+#include "nav/vision/pccs.h"
+#include "nav/vision/relative_pose_5dof.h"
+
+namespace nav::tool {
+namespace {
+
+using vision::Mat5;
+using vision::Mat6;
+using vision::Vec5;
+using vision::Vec6;
+
+constexpr double kDeg = 180.0 / std::numbers::pi;
+
+Mat6 stated_covariance(const PairEvalOptions& o) {
+  Mat6 P = Mat6::Zero();
+  const double s2 = o.prior_position_sigma_m * o.prior_position_sigma_m;
+  const double a2 = o.prior_angle_sigma_rad * o.prior_angle_sigma_rad;
+  P.diagonal() << s2, s2, s2, a2, a2, a2;
+  return P;
+}
+
+double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+/// Unconstrained matches that the true pose confirms (register_eval.h).
+std::vector<vision::Match> true_correspondences(const vision::ImageFeatures& fi,
+                                                const vision::ImageFeatures& fj,
+                                                const vision::CameraIntrinsics& camera,
+                                                const Vec6& x_i_j, double max_error_px) {
+  const Eigen::Matrix3d R_i_j = core::rotation_from_euler(x_i_j.tail<3>());
+  const Eigen::Vector3d t_i_j = x_i_j.head<3>();
+  std::vector<vision::Match> out;
+  for (const vision::Match& m : vision::match_unconstrained(fi, fj).matches) {
+    const Eigen::Vector2d& u_i = fi.points_px[static_cast<std::size_t>(m.index_i)];
+    const Eigen::Vector2d& u_j = fj.points_px[static_cast<std::size_t>(m.index_j)];
+    const Eigen::Vector2d x_i = vision::normalised_from_pixel(camera, u_i);
+    const Eigen::Vector2d x_j = vision::normalised_from_pixel(camera, u_j);
+    double d_i = 0.0, d_j = 0.0;
+    if (!vision::triangulate_depths(R_i_j, t_i_j, x_i, x_j, &d_i, &d_j)) continue;
+    if (!(d_i > 0.0 && d_j > 0.0)) continue;
+    // The point at depth d_i on ray i, seen from camera j.
+    const Eigen::Vector3d X_j = R_i_j.transpose() * (d_i * Eigen::Vector3d(x_i.x(), x_i.y(), 1.0) - t_i_j);
+    if (X_j.z() <= 0.0) continue;
+    const Eigen::Vector2d u_pred = vision::pixel_from_normalised(camera, X_j.head<2>() / X_j.z());
+    if ((u_pred - u_j).norm() <= max_error_px) out.push_back(m);
+  }
+  return out;
+}
+
+}  // namespace
+
+vision::RelativePosePrior make_prior(const PairTruth& truth, const PairEvalOptions& o) {
+  vision::RelativePosePrior prior;
+  prior.covariance = stated_covariance(o);
+  std::mt19937_64 rng(o.seed * 0x9E3779B97F4A7C15ULL + static_cast<std::uint64_t>(truth.i) * 1000003ULL +
+                      static_cast<std::uint64_t>(truth.j));
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Vec6 n;
+  for (int k = 0; k < 6; ++k) n[k] = normal(rng);
+  const Mat6 L = prior.covariance.llt().matrixL();
+  prior.x_i_j = truth.x_i_j + L * n;
+  prior.scene_depth_m = truth.scene_depth_m;
+  prior.scene_depth_sigma_m = o.depth_sigma_fixed_m + o.depth_sigma_fraction * truth.scene_depth_m;
+  return prior;
+}
+
+PairEval evaluate_pair(const vision::Registration& registration, const vision::ImageFeatures& fi,
+                       const vision::ImageFeatures& fj, const PairTruth& truth,
+                       const PairEvalOptions& o, vision::RegistrationDiagnostics* diagnostics) {
+  PairEval e;
+  const vision::RelativePosePrior prior = make_prior(truth, o);
+  const auto start = std::chrono::steady_clock::now();
+  e.result = registration.register_pair(fi, fj, &prior, diagnostics);
+  e.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const Vec5 z_true = vision::z_from_relative_pose(truth.x_i_j);
+  if (e.result.success) {
+    const Vec5& z = e.result.z;
+    e.rotation_error_deg =
+        Eigen::AngleAxisd(vision::rotation_from_z(z).transpose() * vision::rotation_from_z(z_true))
+            .angle() *
+        kDeg;
+    e.baseline_error_deg = angle_between(vision::baseline_direction(z[0], z[1]),
+                                         vision::baseline_direction(z_true[0], z_true[1])) *
+                           kDeg;
+    const Vec5 err = vision::z_minus(z, z_true);
+    e.nees = err.dot(e.result.covariance.ldlt().solve(err));
+  }
+  if (!o.fig4) return e;
+  // Fig. 4: the same prior mean, three covariances.
+  const vision::CameraIntrinsics& camera = registration.camera();
+  const vision::PccsOptions& pccs = registration.options().pccs;
+  const double scale[3] = {1.0, o.bound_inflation, 1.0 / o.overconfidence};
+  const auto truths = true_correspondences(fi, fj, camera, truth.x_i_j, o.max_true_error_px);
+  e.true_correspondences = static_cast<int>(truths.size());
+  for (int c = 0; c < 3; ++c) {
+    vision::RelativePosePrior p = prior;
+    p.covariance *= scale[c];
+    for (const vision::Match& m : truths) {
+      const auto region = vision::search_region(fi.points_px[static_cast<std::size_t>(m.index_i)],
+                                                camera, p, pccs);
+      if (!region.contains(fj.points_px[static_cast<std::size_t>(m.index_j)])) ++e.missed[c];
+    }
+  }
+  return e;
+}
+
+}  // namespace nav::tool

@@ -1,0 +1,46 @@
+// navtool register-eval on a tiny rendered dive (12 frames, its first pairs over the wreck):
+// the command runs end to end, reports every key, registers most overlapping pairs, and its
+// Fig. 4 counts show the PCCS band of the exact prior keeping the true correspondences that an
+// over-confident prior (covariance / 10) loses. The full-survey numbers are in
+// docs/performance.md ("Image registration"), from the same command on >= 300 frames.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "../../daemon/tests/support/navtool_run.h"
+#include "support/sim_dive.h"
+
+namespace nav::sim::test {
+namespace {
+
+const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
+
+TEST(SimRegisterEval, TinyRenderedDiveRegistersAndPccsBandHoldsTheTrueCorrespondences) {
+  const auto dir = scratch_dir("register_eval");
+  const tool::test::NavtoolOutput sim = tool::test::run_navtool(
+      "simulate --out '" + dir.string() + "' --images 12 --render-images");
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const tool::test::NavtoolOutput r =
+      tool::test::run_navtool("register-eval '" + dir.string() + "' --json --threads 2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  for (const char* key : {"pairs", "successes", "success_fraction", "median_rotation_error_deg",
+                          "median_baseline_direction_error_deg", "nees_mean", "wrong",
+                          "wrong_fraction", "fig4", "timing", "prior"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  const int pairs = j["pairs"].get<int>(), successes = j["successes"].get<int>();
+  ASSERT_GE(pairs, 5) << r.out;
+  EXPECT_GE(2 * successes, pairs) << r.out;
+  // At least one registration is consistent with its covariance (NEES below chi2_5(0.999)).
+  EXPECT_LT(j["wrong"].get<int>(), successes) << r.out;
+  const nlohmann::json& f = j["fig4"];
+  const auto truths = f["true_correspondences"].get<long long>();
+  const auto exact = f["missed_exact"].get<long long>();
+  ASSERT_GE(truths, 100) << r.out;
+  EXPECT_LE(100 * exact, truths) << "the exact band misses at most 1 %: " << r.out;
+  EXPECT_LE(f["missed_bound"].get<long long>(), exact) << r.out;
+  EXPECT_GT(f["missed_overconfident"].get<long long>(), 10 * std::max(1LL, exact)) << r.out;
+}
+
+}  // namespace
+}  // namespace nav::sim::test
