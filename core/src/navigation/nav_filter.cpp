@@ -151,6 +151,11 @@ void NavFilter::warn(const std::string& message) const {
   if (options_.warn) options_.warn(message);
 }
 
+Mat12 NavFilter::robot_covariance() const {
+  const Eigen::MatrixXd& bound = bounds_.robot_bound();
+  return bound.rows() == 12 && bound.cols() == 12 ? Mat12(bound) : Mat12::Zero();
+}
+
 const ImageRecord* NavFilter::image_of_state(int block) const {
   if (block <= 0 || static_cast<std::size_t>(block) >= image_of_block_.size()) return nullptr;
   const long i = image_of_block_[static_cast<std::size_t>(block)];
@@ -241,7 +246,6 @@ Status NavFilter::initialise(std::int64_t t_us) {
   if (Status s = bounds_.initialize_robot(P0); !s.ok()) return s;
   if (Status s = recovery_.initialize(x0, P0); !s.ok()) return s;
   warm_.restart(P0);
-  published_.restart(P0);
   initialised_ = true;
   time_us_ = t_us;
   last_validity_us_ = t_us;
@@ -283,7 +287,6 @@ Status NavFilter::predict_once(double dt_s) {
   if (Status s = bounds_.predict_robot(F, Q, keep, kept); !s.ok()) return s;
   ++counters_.predictions;
   warm_.predicted_with(F, Q, keep ? kept : -1);
-  published_.predicted_with(F, Q, -1);
   if (keep) {
     if (image_of_block_.size() <= static_cast<std::size_t>(kept)) {
       image_of_block_.resize(static_cast<std::size_t>(kept) + 1, -1);
@@ -327,7 +330,6 @@ void NavFilter::fuse(const AidObservation<Model>& aid) {
     ++counters_.updates;
     if (!bounds_.update_robot(H, aid.R).ok()) ++counters_.bound_update_failures;
     warm_.updated_with(H, aid.R);
-    published_.updated_with(H, aid.R);
     return;
   }
   ++counters_.update_failures;

@@ -48,10 +48,6 @@ void NavFilter::propose_and_link(ImageRecord& current) {
   counters_.candidates += static_cast<std::uint64_t>(summary.candidates);
   counters_.links_proposed += static_cast<std::uint64_t>(summary.proposed);
   proposals_.push_back(summary);
-  // The image's links, in the published covariance (nav_filter.h "Published covariance").
-  if (summary.accepted > 0 && bounds_.robot_bound().trace() < published_.P.trace()) {
-    published_.P = bounds_.robot_bound();
-  }
 }
 
 LinkRecord NavFilter::try_link(const LinkHypothesis& h, const ImageRecord& current) {

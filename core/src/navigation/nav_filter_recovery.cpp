@@ -28,7 +28,6 @@ void NavFilter::extend_warm_start() {
 
 bool NavFilter::certify(const RecoveryResult& result) {
   warm_.restart(recovery_.robot_covariance());  // the next extension starts from this iterate
-  published_.restart(recovery_.robot_covariance());
   last_relative_residual_ = result.max_relative_residual;
   counters_.max_cg_relative_residual =
       std::max(counters_.max_cg_relative_residual, result.max_relative_residual);
@@ -104,10 +103,7 @@ void NavFilter::take_recovery_result() {
   const Mat12 P_new = warm_.P + warm_.A * (sigma_new - warm_.sigma_tt) * warm_.A.transpose();
   // If P_new is not positive definite, keep the tracked P: the extension then uses
   // Q = P − A Σ'_tt Aᵀ (a warm start only).
-  if (Eigen::LLT<Mat12>(P_new).info() == Eigen::Success) {
-    published_.P += P_new - warm_.P;  // the same correction of the published covariance
-    warm_.P = P_new;
-  }
+  if (Eigen::LLT<Mat12>(P_new).info() == Eigen::Success) warm_.P = P_new;
   warm_.sigma_tt = sigma_new;
   (void)recovery_.set_solution(out.solution);
   const Eigen::Index blocks = out.solution.rows() / d;

@@ -37,12 +37,14 @@
 //   recovery_handoff_s, the next image or finish(): the warm start becomes the result (what
 //   the robot did since stays in A and P, P moved by A (Σ'_tt − Σ_tt) Aᵀ) and the snapshot's
 //   delayed states take its mean. Outputs are bit-identical to synchronous hand-offs.
-// * Published covariance (robot_covariance()): Σ_rr recovered at the last image, then the
-//   same constant-time 12x12 recursion as the robot bound (F P Fᵀ + Q per prediction, a
-//   Joseph-form Kalman update per robot measurement), so it is the robot's marginal at the
-//   filter's time, exact for an exact recovery and no links since; that image's links are
-//   applied as the smaller-trace of P and the certified robot bound (bounds.h), both upper
-//   bounds of the marginal after them. O(1) per measurement.
+// * Published covariance (robot_covariance()): the certified robot bound B_rr of bounds.h. It
+//   is propagated with every prediction (F B Fᵀ + Q) and Kalman-updated with every DVL, heading,
+//   depth and attitude measurement (a constant-time 12x12 recursion), tightened to the
+//   recovered Σ_rr plus its certified error at each image and updated with the image's links;
+//   so it is current at the filter's time and >= the robot's marginal Σ_rr whatever the PCG
+//   budget (bounds.h GUARANTEE). With an exact recovery and no link since the last image it
+//   equals Σ_rr. (The recovered Σ_rr itself can be smaller than Σ_rr after a few PCG
+//   iterations: over-confident where the map is poorly converged.)
 
 #include <cstdint>
 #include <optional>
@@ -99,11 +101,9 @@ class NavFilter {
   const std::vector<ImageRecord>& images() const { return images_; }
   const std::vector<LinkRecord>& links() const { return links_; }
   const std::vector<ProposalRecord>& proposals() const { return proposals_; }
-  /// The robot's covariance at time_us() (file comment "Published covariance"); what navd
-  /// publishes with the robot's mean. Zero before initialisation. Not checkpointed: after a
-  /// checkpoint it restarts from the warm-start tracker's P (the same except for the links of
-  /// the last image).
-  const Mat12& robot_covariance() const { return published_.P; }
+  /// The robot's covariance at time_us() (file comment "Published covariance"): what navd
+  /// publishes with the robot's mean. Zero before initialisation.
+  Mat12 robot_covariance() const;
   /// Pairs waiting for their registration, in proposal order (not checkpointed).
   std::vector<PendingRegistration> pending_registrations() const { return pending_.list(); }
   /// Sequence number of the newest deferred pair (0: none yet).
@@ -168,7 +168,6 @@ class NavFilter {
   LinkGate gate_;
   PendingRegistrations pending_;
   WarmStartTracker warm_;
-  WarmStartTracker published_;  ///< only its P: the published robot covariance
   Initialisation init_;
   bool initialised_ = false;
   std::int64_t time_us_ = 0;           ///< the robot's time

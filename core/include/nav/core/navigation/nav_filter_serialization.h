@@ -123,7 +123,6 @@ void NavFilter::serialize(Archive& ar) {
   serialize_size(ar, init_.roll_pitch_sensor, "initial roll/pitch sensor");
   serialize_size(ar, init_.heading_sensor, "initial heading sensor");
   ar(warm_, "warm start tracker");
-  if constexpr (Archive::kReading) published_.restart(warm_.P);  // not checkpointed
   ar(pending_image_, "pending image");
   auto links = static_cast<std::uint32_t>(pending_links_.size());
   ar(links, "pending link count");
