@@ -60,6 +60,14 @@ struct ReplayOptions {
   std::string checkpoint_identity;
 };
 
+/// The robot's solution as navd publishes it (NAVD_SOLUTION): the mean and the current
+/// covariance (NavFilter::robot_covariance) of the pose at the filter's time.
+struct PublishedSolution {
+  std::int64_t t_us = 0;
+  core::Vec6 pose = core::Vec6::Zero();
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+};
+
 struct ReplayRun {
   std::string log_path;
   std::unique_ptr<RegistrationTable> registrations;
@@ -72,6 +80,9 @@ struct ReplayRun {
   std::string error;        ///< non-empty: the filter or the source failed (what, where)
   std::string resumed_from;             ///< checkpoint file resumed ("" if none)
   std::uint64_t resumed_measurements = 0;  ///< measurements that checkpoint held (skipped)
+  /// The SLAM filter's solution every 1/lcm.channels.nav_solution.rate_hz of data time (the
+  /// first measurement at or after each period), as navd would publish it (published.csv).
+  std::vector<PublishedSolution> published;
 };
 
 /// Plays `log_path` through the filters. Throws DiveLogError / ConfigError / invalid_argument
