@@ -84,10 +84,10 @@ TEST(FootprintOverlap, ProbabilityMatchesMonteCarlo) {
     double rho_xy, rho_x_psi;
   };
   const Case cases[] = {
-      {{0.5, 0.2, 0.1}, {0.3, 0.3, 0.005}, 0.0, 0.0},      // likely: mean well inside
+      {{0.5, 0.2, 0.1}, {1.2, 0.9, 0.005}, 0.0, 0.0},      // mean inside, wide spread
       {{2.6, 0.4, 0.0}, {0.6, 0.4, 0.005}, 0.5, 0.0},      // near the boundary, correlated
       {{5.0, -1.0, 3.0}, {1.0, 0.8, 0.005}, -0.3, 0.0},    // mostly outside, reciprocal line
-      {{1.5, 1.0, 0.4}, {0.7, 0.5, 0.15}, 0.2, 0.6},       // uncertain heading (Gauss-Hermite)
+      {{1.5, 1.0, 0.4}, {1.2, 0.9, 0.15}, 0.2, 0.6},       // uncertain heading (Gauss-Hermite)
   };
   for (const Case& c : cases) {
     Eigen::Matrix3d corr = Eigen::Matrix3d::Identity();
