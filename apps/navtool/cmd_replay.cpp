@@ -17,6 +17,9 @@
 #include "nav/daemon/config/config.h"
 #include "nav/daemon/log/dive_log.h"
 #include "nav/daemon/replay/dive_replay.h"
+#include "nav/daemon/replay/replay_summary.h"
+#include "nav/report/metrics.h"
+#include "nav/report/replay_data.h"
 #include "navtool/commands.h"
 
 namespace nav::tool {
@@ -86,8 +89,18 @@ void run_replay_command(const ReplayArgs& args) {
     options.as_fast_as_possible = args.as_fast_as_possible;
     daemon::ReplayRun run = daemon::run_replay(log.string(), config, options);
     const daemon::ReplayAnalysis analysis = daemon::analyse(*run.slam);
-    const std::string summary =
-        daemon::replay_summary_json(run, analysis, dive_dir.string(), config_path.string());
+    daemon::ReplaySummary brief =
+        daemon::make_replay_summary(run, analysis, dive_dir.string(), config_path.string());
+    if (const fs::path truth = dive_dir / "truth.csv"; fs::exists(truth)) {
+      // The published covariance against the simulator's truth (report::published_nees).
+      const report::PublishedNees nees =
+          report::published_nees(run.published, report::read_timed_poses(truth));
+      if (nees.samples > 0) {
+        brief.published_nees_mean = nees.mean;
+        brief.published_nees_exceed_99_fraction = nees.exceed_99_fraction;
+      }
+    }
+    const std::string summary = daemon::replay_summary_json(brief, run);
     if (!args.out_dir.empty()) {
       daemon::write_replay_outputs(run, analysis, summary, args.out_dir);
       if (run.vision) write_vision_answers(run, fs::path(args.out_dir) / "vision_answers.csv");

@@ -126,7 +126,7 @@ TEST(OutputSchema, EveryFileWrittenIsReadBackThroughTheSameSchema) {
   proposals[0].frame_id = 4;
   proposals[0].candidates = 3;
   proposals[1].frame_id = 5;
-  write_proposals_csv(proposals, dir / schema::ProposalsCsv::schema().file());
+  write_proposals_csv(proposals, {{2, 1}}, dir / schema::ProposalsCsv::schema().file());
 
   core::InformationMatrix info(12);
   for (int b = 0; b < 3; ++b) info.add_block();

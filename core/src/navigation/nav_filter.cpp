@@ -38,13 +38,11 @@ NavFilterOptions validated(NavFilterOptions o) {
   if (!(o.max_predict_step_s > 0.0) ||
       !(o.min_predict_step_s >= 0.0 && o.min_predict_step_s < o.max_predict_step_s) ||
       !(o.default_altitude_m > 0.0) ||
-      !(o.proposal_confidence > 0.0 && o.proposal_confidence < 1.0) ||
       !(o.camera_gate_chi2 > 0.0) || !(o.initial_xy_sigma_m > 0.0) ||
       !(o.initial_velocity_sigma_mps > 0.0) || !(o.initial_rate_sigma_radps > 0.0)) {
     throw std::invalid_argument(
         "NavFilterOptions: max_predict_step_s, default_altitude_m, camera_gate_chi2 and the "
-        "initial sigmas must be > 0, min_predict_step_s in [0, max_predict_step_s), "
-        "proposal_confidence in (0, 1)");
+        "initial sigmas must be > 0, min_predict_step_s in [0, max_predict_step_s)");
   }
   if (!(o.recovery_handoff_s >= 0.0 && o.recovery_handoff_s <= 3600.0)) {
     throw std::invalid_argument("NavFilterOptions: recovery_handoff_s must be in [0, 3600] s, is " +
@@ -70,6 +68,17 @@ Vec6 camera_mount(const SensorModels& sensors) {
   return sensors.camera() ? sensors.camera()->x_body_camera : Vec6::Zero();
 }
 
+/// Footprint half extents per metre of altitude, (cx/fx, cy/fy), of the first camera (as
+/// SensorModels picks it; zero without a camera).
+Eigen::Vector2d footprint_half_extent_per_altitude(const std::vector<SensorModelOptions>& sensors) {
+  for (const SensorModelOptions& s : sensors) {
+    if (s.camera && s.camera->fx_px > 0.0 && s.camera->fy_px > 0.0) {
+      return {s.camera->cx_px / s.camera->fx_px, s.camera->cy_px / s.camera->fy_px};
+    }
+  }
+  return Eigen::Vector2d::Zero();
+}
+
 }  // namespace
 
 const char* to_string(LinkOutcome outcome) {
@@ -90,7 +99,7 @@ NavFilter::NavFilter(NavFilterOptions options, const RegistrationTable* registra
       recovery_(12, filter_thread_recovery(options_)),
       bounds_(12, options_.bounds),
       jobs_(make_schedule(options_)),
-      proposer_(options_.proposal_confidence, sensors_.footprint_radius_per_altitude(),
+      proposer_(options_.proposal, footprint_half_extent_per_altitude(options_.sensors),
                 camera_mount(sensors_)),
       gate_(options_.camera_gate_chi2, options_.warn),
       pending_(options_.registration_wait_s, options_.max_pending_registrations),
@@ -141,6 +150,11 @@ std::string NavFilter::index_error() const {
 
 void NavFilter::warn(const std::string& message) const {
   if (options_.warn) options_.warn(message);
+}
+
+Mat12 NavFilter::robot_covariance() const {
+  const Eigen::MatrixXd& bound = bounds_.robot_bound();
+  return bound.rows() == 12 && bound.cols() == 12 ? Mat12(bound) : Mat12::Zero();
 }
 
 const ImageRecord* NavFilter::image_of_state(int block) const {

@@ -1,6 +1,7 @@
 // NavFilter's camera links: proposal at each image, registration look-up or deferral, gate and
 // update (the test: navigation/link_proposer.h; gate and linearisation: link_gate.h; deferral:
 // navigation/pending_registrations.h).
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -16,30 +17,30 @@ constexpr int kD = 12;  // block dimension
 void NavFilter::propose_and_link(ImageRecord& current) {
   ProposalRecord summary;
   summary.frame_id = current.frame_id;
-  scratch_proposals_.clear();
+  scratch_hypotheses_.clear();
   for (int block = 1; block < filter_.num_blocks(); ++block) {
     const long index = image_of_block_[static_cast<std::size_t>(block)];
     if (index < 0) continue;
     ++summary.candidates;
-    Proposal p;
-    p.image = static_cast<std::size_t>(index);
-    if (proposer_.propose(filter_, bounds_, recovery_, block, images_[p.image].altitude_m,
-                          current.altitude_m, &p.joint)) {
-      scratch_proposals_.push_back(std::move(p));
-    }
+    std::optional<LinkHypothesis> h =
+        proposer_.evaluate(filter_, bounds_, recovery_, block,
+                           images_[static_cast<std::size_t>(index)].altitude_m, current.altitude_m);
+    if (h) scratch_hypotheses_.push_back(std::move(*h));
   }
-  summary.proposed = static_cast<int>(scratch_proposals_.size());
-  for (const Proposal& p : scratch_proposals_) {
+  proposer_.rank_and_cap(scratch_hypotheses_);
+  summary.proposed = static_cast<int>(scratch_hypotheses_.size());
+  for (const LinkHypothesis& h : scratch_hypotheses_) {
+    const ImageRecord& earlier = *image_of_state(h.joint.state);
     PendingRegistrations::Entry entry;
-    entry.info.frame_i = images_[p.image].frame_id;
+    entry.info.frame_i = earlier.frame_id;
     entry.info.frame_j = current.frame_id;
-    entry.info.t_i_us = images_[p.image].t_us;
+    entry.info.t_i_us = earlier.t_us;
     entry.info.t_j_us = current.t_us;
-    entry.joint = p.joint;
+    entry.joint = h.joint;
     entry.image_j = images_.size() - 1;
     entry.proposal = proposals_.size();  // this image's record, pushed after its proposals
     if (pending_.defer(registrations_, std::move(entry), now_realtime_us_)) continue;
-    LinkRecord link = try_link(p, current);
+    LinkRecord link = try_link(h, current);
     if (link.outcome == LinkOutcome::kAccepted) ++summary.accepted;
     pending_links_.push_back(links_.size());
     links_.push_back(link);
@@ -49,9 +50,9 @@ void NavFilter::propose_and_link(ImageRecord& current) {
   proposals_.push_back(summary);
 }
 
-LinkRecord NavFilter::try_link(const Proposal& p, const ImageRecord& current) {
-  const ImageRecord& earlier = images_[p.image];
-  const int block = p.joint.state;
+LinkRecord NavFilter::try_link(const LinkHypothesis& h, const ImageRecord& current) {
+  const int block = h.joint.state;
+  const ImageRecord& earlier = *image_of_state(block);
   LinkRecord link;
   link.t_us = current.t_us;
   link.frame_i = earlier.frame_id;
@@ -66,7 +67,7 @@ LinkRecord NavFilter::try_link(const Proposal& p, const ImageRecord& current) {
     ++counters_.not_registered;
     return link;
   }
-  resolve_link(p.joint, Esdf::kRobotBlock, *reg, link);
+  resolve_link(h.joint, Esdf::kRobotBlock, *reg, link);
   return link;
 }
 

@@ -32,7 +32,8 @@ core::Vec3 read_psd(const YamlReader& r) {
 FilterConfig parse_filter(const YamlReader& f) {
   f.expect_map({"process_noise_psd", "cg_iterations_per_step", "latency_window_ms",
                 "gating_chi2_threshold", "recovery_thread", "recovery_handoff_s",
-                "registration_wait_s", "max_pending_registrations"});
+                "registration_wait_s", "max_pending_registrations", "proposal_min_probability",
+                "proposal_min_overlap", "proposal_max_per_image"});
   FilterConfig filter;
   if (f.has("process_noise_psd")) {
     const YamlReader p = f.at("process_noise_psd");
@@ -49,6 +50,9 @@ FilterConfig parse_filter(const YamlReader& f) {
   f.read("recovery_handoff_s", filter.recovery_handoff_s, 0.0, 3600.0);
   f.read("registration_wait_s", filter.registration_wait_s, 0.0, 3600.0);
   f.read("max_pending_registrations", filter.max_pending_registrations, 1, 100000);
+  f.read("proposal_min_probability", filter.proposal_min_probability, 1e-9, 1.0 - 1e-9);
+  f.read("proposal_min_overlap", filter.proposal_min_overlap, 1e-3, 1.0);
+  f.read("proposal_max_per_image", filter.proposal_max_per_image, 1, 100000);
   return filter;
 }
 

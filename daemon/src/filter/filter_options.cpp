@@ -43,6 +43,9 @@ core::NavFilterOptions filter_options_from_config(const NavdConfig& config) {
   if (o.recovery_thread) o.recovery_executor = threaded_recovery_executor();
   o.registration_wait_s = config.filter.registration_wait_s;
   o.max_pending_registrations = config.filter.max_pending_registrations;
+  o.proposal.min_probability = config.filter.proposal_min_probability;
+  o.proposal.min_overlap_fraction = config.filter.proposal_min_overlap;
+  o.proposal.max_per_image = config.filter.proposal_max_per_image;
   o.warn = [](const std::string& message) { spdlog::warn("{}", message); };
   return o;
 }

@@ -92,12 +92,31 @@ void write_links_csv(const std::vector<LinkRecord>& links, const std::filesystem
 }
 
 void write_proposals_csv(const std::vector<ProposalRecord>& rows,
+                         const std::vector<ProposalTruth>& truth,
                          const std::filesystem::path& path) {
   File f = open_csv(path, schema::ProposalsCsv::schema());
-  for (const ProposalRecord& r : rows) {
-    // ProposalsCsv: frame_id, candidates, proposed, accepted.
-    std::fprintf(f.get(), "%llu,%d,%d,%d\n", static_cast<unsigned long long>(r.frame_id),
-                 r.candidates, r.proposed, r.accepted);
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const ProposalRecord& r = rows[k];
+    const ProposalTruth t = k < truth.size() ? truth[k] : ProposalTruth{};
+    // ProposalsCsv: frame_id, candidates, proposed, accepted, true_overlapping(_proposed).
+    std::fprintf(f.get(), "%llu,%d,%d,%d,%d,%d\n", static_cast<unsigned long long>(r.frame_id),
+                 r.candidates, r.proposed, r.accepted, t.true_overlapping,
+                 t.true_overlapping_proposed);
+  }
+  close_csv(std::move(f), path);
+}
+
+void write_published_csv(const std::vector<PublishedSolution>& rows,
+                         const std::filesystem::path& path) {
+  File f = open_csv(path, schema::PublishedCsv::schema());
+  for (const PublishedSolution& p : rows) {
+    // PublishedCsv: t_us, pose, covariance upper triangle row-major.
+    std::fprintf(f.get(), "%lld", static_cast<long long>(p.t_us));
+    for (int k = 0; k < 6; ++k) std::fprintf(f.get(), ",%.10g", p.pose(k));
+    for (int r = 0; r < 6; ++r) {
+      for (int c = r; c < 6; ++c) std::fprintf(f.get(), ",%.10g", p.covariance(r, c));
+    }
+    std::fprintf(f.get(), "\n");
   }
   close_csv(std::move(f), path);
 }
@@ -144,7 +163,10 @@ void write_replay_outputs(const ReplayRun& run, const ReplayAnalysis& analysis,
   }
   write_states_csv(analysis.states, out / schema::StatesCsv::schema().file());
   write_links_csv(run.slam->links(), out / schema::LinksCsv::schema().file());
-  write_proposals_csv(run.slam->proposals(), out / schema::ProposalsCsv::schema().file());
+  write_proposals_csv(run.slam->proposals(),
+                      proposal_recall(*run.slam, *run.registrations).per_image,
+                      out / schema::ProposalsCsv::schema().file());
+  write_published_csv(run.published, out / schema::PublishedCsv::schema().file());
   write_information_blocks_csv(run.slam->esdf().information(),
                                out / schema::InformationBlocksCsv::schema().file());
   write_logdet_csv(analysis.logdet, out / schema::LogdetCsv::schema().file());

@@ -96,7 +96,26 @@ const CsvSchema& LinksCsv::schema() {
 const CsvSchema& ProposalsCsv::schema() {
   static const CsvSchema schema(
       "proposals.csv",
-      {{"frame_id", ""}, {"candidates", ""}, {"proposed", ""}, {"accepted", ""}});
+      {{"frame_id", ""},
+       {"candidates", ""},
+       {"proposed", ""},
+       {"accepted", ""},
+       {"true_overlapping", ""},
+       {"true_overlapping_proposed", ""}});
+  return schema;
+}
+
+const CsvSchema& PublishedCsv::schema() {
+  static const CsvSchema schema("published.csv", [] {
+    std::vector<Column> c{{"t_us", "us"}};
+    append_pose(c);
+    std::vector<Column> full;
+    append_matrix(full, 'c');
+    for (int r = 0; r < 6; ++r) {
+      for (int col = r; col < 6; ++col) c.push_back(full[static_cast<std::size_t>(6 * r + col)]);
+    }
+    return c;
+  }());
   return schema;
 }
 

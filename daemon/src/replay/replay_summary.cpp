@@ -8,6 +8,7 @@
 
 #include "nav/daemon/replay/dive_replay.h"
 #include "nav/daemon/replay/output_schema.h"
+#include "nav/daemon/replay/proposal_recall.h"
 
 namespace nav::daemon {
 namespace {
@@ -118,6 +119,10 @@ std::string ReplaySummary::to_json() const {
   j["camera_gate_chi2_5dof"] = camera_gate_chi2_5dof;
   j["registrations"] = registrations;
   j["registration_outliers"] = registration_outliers;
+  j["proposals_per_image_mean"] = proposals_per_image_mean;
+  j["proposal_recall"] = proposal_recall;
+  j["published_nees_mean"] = published_nees_mean;
+  j["published_nees_exceed_99_fraction"] = published_nees_exceed_99_fraction;
   j["conservative_fraction"] = conservative_fraction;
   j["states_checked"] = states_checked;
   j["measurements"] = measurements;
@@ -184,6 +189,10 @@ ReplaySummary ReplaySummary::from_json(const std::string& text, const std::strin
   read(j, "camera_gate_chi2_5dof", s.camera_gate_chi2_5dof);
   read(j, "registrations", s.registrations);
   read(j, "registration_outliers", s.registration_outliers);
+  read(j, "proposals_per_image_mean", s.proposals_per_image_mean);
+  read(j, "proposal_recall", s.proposal_recall);
+  read(j, "published_nees_mean", s.published_nees_mean);
+  read(j, "published_nees_exceed_99_fraction", s.published_nees_exceed_99_fraction);
   read(j, "conservative_fraction", s.conservative_fraction);
   read(j, "states_checked", s.states_checked);
   read(j, "measurements", s.measurements);
@@ -235,6 +244,9 @@ ReplaySummary make_replay_summary(const ReplayRun& run, const ReplayAnalysis& an
   s.camera_gate_chi2_5dof = run.slam->options().camera_gate_chi2;
   s.registrations = run.registrations->size();
   s.registration_outliers = run.registrations->outliers();
+  const ProposalRecall recall = proposal_recall(*run.slam, *run.registrations);
+  if (!run.slam->proposals().empty()) s.proposals_per_image_mean = recall.proposals_per_image_mean;
+  s.proposal_recall = recall.recall().value_or(ReplaySummary::kUnset);
   s.conservative_fraction = analysis.conservative_fraction;
   s.states_checked = analysis.states.size();
   s.measurements = c.measurements;
@@ -250,9 +262,8 @@ ReplaySummary make_replay_summary(const ReplayRun& run, const ReplayAnalysis& an
   return s;
 }
 
-std::string replay_summary_json(const ReplayRun& run, const ReplayAnalysis& analysis,
-                                const std::string& dive_dir, const std::string& config_path) {
-  const std::string json = make_replay_summary(run, analysis, dive_dir, config_path).to_json();
+std::string replay_summary_json(const ReplaySummary& summary, const ReplayRun& run) {
+  const std::string json = summary.to_json();
   if (!run.vision) return json;
   // vision.enabled: navd's own vision stage (vision/vision_link.h), its counters at the end.
   const vision::VisionLinkStats& v = *run.vision;

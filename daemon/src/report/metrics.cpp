@@ -147,6 +147,35 @@ ConservativeResult conservative_bounds(const std::vector<DelayedState>& states, 
   return r;
 }
 
+PublishedNees published_nees(const std::vector<daemon::PublishedSolution>& published,
+                             const std::vector<TimedPose>& truth) {
+  PublishedNees out;
+  size_t exceed = 0;
+  double sum = 0.0;
+  for (const daemon::PublishedSolution& p : published) {
+    const std::optional<core::Vec6> t = truth_pose_at(truth, p.t_us);
+    if (!t) {
+      ++out.outside_truth;
+      continue;
+    }
+    const Eigen::LLT<core::Mat6> llt(p.covariance);
+    if (llt.info() != Eigen::Success) {
+      ++out.not_positive_definite;
+      continue;
+    }
+    const core::Vec6 e = core::pose_minus(p.pose, *t);
+    const double nees = e.dot(llt.solve(e));
+    sum += nees;
+    exceed += nees > kChi2Dof6Quantile99 ? 1 : 0;
+    ++out.samples;
+  }
+  if (out.samples > 0) {
+    out.mean = sum / static_cast<double>(out.samples);
+    out.exceed_99_fraction = static_cast<double>(exceed) / static_cast<double>(out.samples);
+  }
+  return out;
+}
+
 LinkCounts count_links(const std::vector<ProposedLink>& links) {
   LinkCounts c;
   std::set<std::pair<long long, long long>> pairs;
@@ -220,6 +249,24 @@ json compute_metrics(const ReplayOutput& replay, const DiveData* dive,
       m["nees_states_without_truth"] = nees.without_truth;
       m["nees_states_exact_not_positive_definite"] = nees.exact_not_positive_definite;
     }
+  }
+  m["proposals_per_image_mean"] =
+      replay.proposal_rows > 0
+          ? json(static_cast<double>(replay.proposed) / static_cast<double>(replay.proposal_rows))
+          : json(nullptr);
+  m["proposal_recall"] = replay.true_overlapping > 0
+                             ? json(static_cast<double>(replay.true_overlapping_proposed) /
+                                    static_cast<double>(replay.true_overlapping))
+                             : json(nullptr);
+  m["published_nees_mean"] = nullptr;
+  m["published_nees_exceed_99_fraction"] = nullptr;
+  if (dive && !replay.published.empty()) {
+    const PublishedNees nees = published_nees(replay.published, dive->truth);
+    if (nees.samples > 0) {
+      m["published_nees_mean"] = nees.mean;
+      m["published_nees_exceed_99_fraction"] = nees.exceed_99_fraction;
+    }
+    m["published_nees_samples"] = nees.samples;
   }
   for (const char* key :
        {"dr_xy_rms_m", "slam_xy_rms_m", "slam_final_xy_error_m", "nees_mean", "nees_95_interval"}) {

@@ -242,6 +242,30 @@ nlohmann::json read_json(const fs::path& file) {
   }
 }
 
+std::vector<daemon::PublishedSolution> read_published(const fs::path& file) {
+  using schema::PublishedCsv;
+  const CsvTable t = CsvTable::read(file);
+  const schema::CsvSchema& csv = PublishedCsv::schema();
+  const size_t t_col = column(t, csv, PublishedCsv::kTimeUs);
+  const auto cols = pose_columns(t);
+  std::array<size_t, 21> cov_cols{};
+  for (int r = 0, k = 0; r < 6; ++r) {
+    for (int c = r; c < 6; ++c) cov_cols[static_cast<size_t>(k++)] = column(t, csv, PublishedCsv::cell(r, c));
+  }
+  std::vector<daemon::PublishedSolution> out(t.rows());
+  for (size_t row = 0; row < t.rows(); ++row) {
+    daemon::PublishedSolution& p = out[row];
+    p.t_us = t.integer(row, t_col);
+    p.pose = pose_at(t, row, cols);
+    for (int r = 0, k = 0; r < 6; ++r) {
+      for (int c = r; c < 6; ++c) {
+        p.covariance(r, c) = p.covariance(c, r) = t.number(row, cov_cols[static_cast<size_t>(k++)]);
+      }
+    }
+  }
+  return out;
+}
+
 ReplayOutput read_replay_output(const fs::path& dir) {
   if (!fs::is_directory(dir)) throw ReportError(dir.string() + ": not a directory");
   ReplayOutput out;
@@ -255,7 +279,24 @@ ReplayOutput read_replay_output(const fs::path& dir) {
   out.links = read_links(dir / LinksCsv::schema().file());
   if (const fs::path proposals = dir / schema::ProposalsCsv::schema().file();
       fs::exists(proposals)) {
-    out.proposal_rows = static_cast<long long>(CsvTable::read(proposals).rows());
+    const CsvTable t = CsvTable::read(proposals);
+    out.proposal_rows = static_cast<long long>(t.rows());
+    const schema::CsvSchema& csv = schema::ProposalsCsv::schema();
+    const size_t proposed = column(t, csv, schema::ProposalsCsv::kProposed);
+    const auto truth = t.find_column(csv.name(schema::ProposalsCsv::kTrueOverlapping));
+    const auto found =
+        t.find_column(csv.name(schema::ProposalsCsv::kTrueOverlappingProposed));
+    for (size_t r = 0; r < t.rows(); ++r) {
+      out.proposed += t.integer(r, proposed);
+      if (truth && found) {
+        out.true_overlapping += t.integer(r, *truth);
+        out.true_overlapping_proposed += t.integer(r, *found);
+      }
+    }
+  }
+  if (const fs::path published = dir / schema::PublishedCsv::schema().file();
+      fs::exists(published)) {
+    out.published = read_published(published);
   }
   if (const fs::path blocks = dir / InformationBlocksCsv::schema().file(); fs::exists(blocks)) {
     out.blocks = read_block_pattern(blocks);

@@ -141,9 +141,9 @@ void LinkPublisher::update_board(const daemon::NavFilter& filter) {
     v.robot_mean = robot;
     if (robot_only) {
       v.robot_covariance = *robot_only;  // no delayed state yet: Σ_rr = Λ_rr⁻¹ exactly
-    } else if (!images.empty()) {
-      v.robot_covariance = images.back().robot_covariance;
-      v.cg_relative_residual = images.back().relative_residual;
+    } else {
+      v.robot_covariance = filter.robot_covariance();  // current (nav_filter.h "Published")
+      if (!images.empty()) v.cg_relative_residual = images.back().relative_residual;
     }
     v.cg_iterations = filter.options().recovery.iterations_per_step;
     v.num_delayed_states = filter.esdf().num_blocks() - 1;

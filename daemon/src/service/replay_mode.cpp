@@ -11,6 +11,7 @@
 #include "nav/daemon/system/host_clock.h"
 #include "nav/daemon/queue/measurement_queue.h"
 #include "nav/daemon/replay/dive_replay.h"
+#include "nav/daemon/replay/replay_summary.h"
 #include "nav/daemon/service/lcm_url.h"
 #include "nav/daemon/service/link_publisher.h"
 #include "nav/daemon/service/publisher.h"
@@ -84,7 +85,8 @@ int run_replay_mode(const daemon::NavdConfig& config, const ReplayModeArgs& args
   const daemon::ReplayAnalysis analysis = daemon::analyse(*run.slam);
   const std::string dive_dir = std::filesystem::path(args.log_path).parent_path().string();
   const std::string summary =
-      daemon::replay_summary_json(run, analysis, dive_dir, args.config_path);
+      daemon::replay_summary_json(
+          daemon::make_replay_summary(run, analysis, dive_dir, args.config_path), run);
   if (!args.out_dir.empty()) daemon::write_replay_outputs(run, analysis, summary, args.out_dir);
   std::printf("%s\n", summary.c_str());
   std::fflush(stdout);

@@ -62,6 +62,19 @@ NeesResult delayed_state_nees(const std::vector<DelayedState>& states,
                               const std::vector<TrueImage>& images,
                               const std::vector<TimedPose>& truth);
 
+/// NEES e' P^-1 e (6 dof, e = published pose - truth interpolated at t_us, angles wrapped) of
+/// every published solution (published.csv) with its published covariance P: the test that
+/// the covariance navd publishes between images is honest. Rows outside truth or with a P
+/// that is not positive definite are counted and skipped.
+struct PublishedNees {
+  size_t samples = 0, outside_truth = 0, not_positive_definite = 0;
+  double mean = 0.0;
+  double exceed_99_fraction = 0.0;  ///< fraction above chi2(6, 0.99) = kChi2Dof6Quantile99
+};
+inline constexpr double kChi2Dof6Quantile99 = 16.811894;
+PublishedNees published_nees(const std::vector<daemon::PublishedSolution>& published,
+                             const std::vector<TimedPose>& truth);
+
 /// How many stored bounds are conservative: bound - exact PSD (core/recovery/consistency.h,
 /// relative tolerance `tol`), and the worst smallest eigenvalue of bound - exact.
 struct ConservativeResult {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "nav/core/geometry/types.h"
+#include "nav/daemon/replay/dive_replay.h"
 #include "nav/daemon/replay/replay_summary.h"
 
 namespace nav::report {
@@ -72,6 +73,10 @@ struct ReplayOutput {
   std::vector<DelayedState> states;       ///< states.csv
   std::vector<ProposedLink> links;        ///< links.csv
   long long proposal_rows = 0;            ///< proposals.csv rows (optional file)
+  long long proposed = 0;                 ///< proposals.csv: sum of proposed
+  long long true_overlapping = 0;         ///< ... of true_overlapping (0 when absent)
+  long long true_overlapping_proposed = 0;  ///< ... of true_overlapping_proposed
+  std::vector<daemon::PublishedSolution> published;  ///< published.csv (optional)
   std::optional<BlockPattern> blocks;     ///< information_blocks.csv (optional)
   std::vector<LogdetRow> logdet;          ///< logdet.csv (optional)
 };
@@ -97,6 +102,7 @@ std::vector<DelayedState> read_states(const std::filesystem::path& file);
 std::vector<ProposedLink> read_links(const std::filesystem::path& file);
 BlockPattern read_block_pattern(const std::filesystem::path& file);
 std::vector<LogdetRow> read_logdet(const std::filesystem::path& file);
+std::vector<daemon::PublishedSolution> read_published(const std::filesystem::path& file);
 daemon::ReplaySummary read_summary(const std::filesystem::path& file);
 nlohmann::json read_json(const std::filesystem::path& file);
 

@@ -27,15 +27,24 @@
 // * Image at t: predict to t; extend the warm start across everything since the last recovery
 //   (warm_start_tracker.h); recovery_.iterations_per_step PCG iterations on the current Λ, η
 //   (or, with a recovery executor, the true residual of the previous job's extended result:
-//   the certificate the bounds need); hand it to the bounds (certified, bounds.h); propose
-//   links from the robot (= this image) to every earlier delayed state, look each pair up in
-//   the RegistrationTable, gate it and apply accepted links to the ESDF and to Σ~_ii (bounds
+//   the certificate the bounds need); hand it to the bounds (certified, bounds.h); evaluate
+//   the link hypothesis from the robot (= this image) to every earlier delayed state and
+//   propose the most probable ones, at most proposal.max_per_image (link_proposer.h); look each
+//   pair up in the RegistrationTable, gate it and apply accepted links to the ESDF and to Σ~_ii (bounds
 //   update, constant time). The next prediction keeps the robot as this image's delayed state.
 // * Recovery executor (recovery_thread): after the image's links the filter submits a job on
 //   a snapshot of Λ, η and the warm start, and takes its result at data time t +
 //   recovery_handoff_s, the next image or finish(): the warm start becomes the result (what
 //   the robot did since stays in A and P, P moved by A (Σ'_tt − Σ_tt) Aᵀ) and the snapshot's
 //   delayed states take its mean. Outputs are bit-identical to synchronous hand-offs.
+// * Published covariance (robot_covariance()): the certified robot bound B_rr of bounds.h. It
+//   is propagated with every prediction (F B Fᵀ + Q) and Kalman-updated with every DVL, heading,
+//   depth and attitude measurement (a constant-time 12x12 recursion), tightened to the
+//   recovered Σ_rr plus its certified error at each image and updated with the image's links;
+//   so it is current at the filter's time and >= the robot's marginal Σ_rr whatever the PCG
+//   budget (bounds.h GUARANTEE). With an exact recovery and no link since the last image it
+//   equals Σ_rr. (The recovered Σ_rr itself can be smaller than Σ_rr after a few PCG
+//   iterations: over-confident where the map is poorly converged.)
 
 #include <cstdint>
 #include <optional>
@@ -92,6 +101,9 @@ class NavFilter {
   const std::vector<ImageRecord>& images() const { return images_; }
   const std::vector<LinkRecord>& links() const { return links_; }
   const std::vector<ProposalRecord>& proposals() const { return proposals_; }
+  /// The robot's covariance at time_us() (file comment "Published covariance"): what navd
+  /// publishes with the robot's mean. Zero before initialisation.
+  Mat12 robot_covariance() const;
   /// Pairs waiting for their registration, in proposal order (not checkpointed).
   std::vector<PendingRegistration> pending_registrations() const { return pending_.list(); }
   /// Sequence number of the newest deferred pair (0: none yet).
@@ -110,10 +122,6 @@ class NavFilter {
   void restore_map(Esdf filter, CovarianceBounds bounds, StateRecovery recovery);
 
  private:
-  struct Proposal {
-    LinkProposal joint;
-    std::size_t image = 0;  ///< index into images_
-  };
   /// Measurements held until the first attitude, heading and depth (file comment).
   struct Initialisation {
     std::optional<BodyAttitude> roll_pitch, heading;
@@ -138,7 +146,7 @@ class NavFilter {
   bool certify(const RecoveryResult& result);
   void take_recovery_result();
   void propose_and_link(ImageRecord& current);
-  LinkRecord try_link(const Proposal& p, const ImageRecord& current);
+  LinkRecord try_link(const LinkHypothesis& h, const ImageRecord& current);
   /// Gates a registered pair (earlier block joint.state, later block `block_j`), applies it.
   void resolve_link(const LinkProposal& joint, int block_j, const RegistrationResult& reg,
                     LinkRecord& link);
@@ -173,7 +181,7 @@ class NavFilter {
   std::vector<ImageRecord> images_;
   std::vector<LinkRecord> links_;
   std::vector<ProposalRecord> proposals_;
-  std::vector<Proposal> scratch_proposals_;
+  std::vector<LinkHypothesis> scratch_hypotheses_;
   NavFilterCounters counters_;
   SensorInnovationStats innovations_;
 };

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "nav/core/models/constant_velocity.h"
+#include "nav/core/navigation/link_proposer.h"
 #include "nav/core/navigation/recovery_executor.h"
 #include "nav/core/navigation/sensor_models.h"
 #include "nav/core/recovery/bounds.h"
@@ -30,7 +31,8 @@ struct NavFilterOptions {
   /// has a pose block ~dt³ whose inverse makes the information form lose its digits.
   double min_predict_step_s = 0.005;
   double default_altitude_m = 3.0;         ///< footprint altitude before any altitude, > 0
-  double proposal_confidence = 0.99;       ///< of the proposal ellipse, in (0, 1)
+  /// Link hypotheses: probability, overlap fraction and per-image cap (link_proposer.h).
+  LinkProposerOptions proposal;
   double camera_gate_chi2 = 15.086;        ///< 5-dof gate (chi2 99 %)
   StateRecoveryOptions recovery;           ///< PCG iterations per image
   BoundsOptions bounds;                    ///< certified (default)

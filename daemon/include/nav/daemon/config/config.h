@@ -135,6 +135,12 @@ struct FilterConfig {
   /// The live mode needs > 0 (its vision stage answers after the image).
   double registration_wait_s = 0.0;
   int max_pending_registrations = 256;  ///< bound on the waiting pairs, [1, 100000]
+  /// Link hypotheses (nav/core/navigation/link_proposer.h): a pair is proposed when the
+  /// probability that the footprints overlap by >= proposal_min_overlap reaches
+  /// proposal_min_probability, the most probable proposal_max_per_image per image.
+  double proposal_min_probability = 0.05;  ///< [1e-9, 1 - 1e-9]
+  double proposal_min_overlap = 0.2;       ///< [1e-3, 1]
+  int proposal_max_per_image = 15;         ///< [1, 100000]
 };
 
 struct LcmChannel {

@@ -63,6 +63,14 @@ struct ReplayOptions {
   std::string checkpoint_identity;
 };
 
+/// The robot's solution as navd publishes it (NAVD_SOLUTION): the mean and the current
+/// covariance (NavFilter::robot_covariance) of the pose at the filter's time.
+struct PublishedSolution {
+  std::int64_t t_us = 0;
+  core::Vec6 pose = core::Vec6::Zero();
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+};
+
 struct ReplayRun {
   std::string log_path;
   std::unique_ptr<RegistrationTable> registrations;
@@ -79,6 +87,9 @@ struct ReplayRun {
   /// reading the log's registrations; its counters at the end.
   std::optional<vision::VisionLinkStats> vision;
   std::vector<vision::AppliedAnswer> vision_answers;  ///< every answer applied, in order
+  /// The SLAM filter's solution every 1/lcm.channels.nav_solution.rate_hz of data time (the
+  /// first measurement at or after each period), as navd would publish it (published.csv).
+  std::vector<PublishedSolution> published;
 };
 
 /// Plays `log_path` through the filters. Throws DiveLogError / ConfigError / invalid_argument
@@ -112,10 +123,10 @@ struct ReplayAnalysis {
 /// current; the filter is otherwise unchanged).
 ReplayAnalysis analyse(NavFilter& slam);
 
-/// The JSON summary (one line): make_replay_summary(...).to_json() (replay_summary.h; keys listed
-/// in README.md "navtool replay").
-std::string replay_summary_json(const ReplayRun& run, const ReplayAnalysis& analysis,
-                                const std::string& dive_dir, const std::string& config_path);
+struct ReplaySummary;
+/// The JSON summary (one line): summary.to_json() (replay_summary.h; keys listed in README.md
+/// "navtool replay"), with run.vision's counters as "vision" when navd registered the frames.
+std::string replay_summary_json(const ReplaySummary& summary, const ReplayRun& run);
 
 /// Writes every file of hil-tests/README.md "Replay output directory" into `dir` (created), with
 /// the writers of output_files.h. Throws std::runtime_error naming the file that cannot be

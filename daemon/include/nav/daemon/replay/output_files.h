@@ -12,6 +12,7 @@
 #include "nav/core/filter/information_matrix.h"
 #include "nav/core/navigation/nav_filter.h"
 #include "nav/daemon/replay/dive_replay.h"
+#include "nav/daemon/replay/proposal_recall.h"
 
 namespace nav::daemon {
 
@@ -22,8 +23,12 @@ void write_trajectory_csv(const std::vector<ImageRecord>& images,
 void write_states_csv(const std::vector<StateCheck>& states, const std::filesystem::path& path);
 /// links.csv: one row per proposed pair; mahalanobis_sq empty when negative (never gated).
 void write_links_csv(const std::vector<LinkRecord>& links, const std::filesystem::path& path);
-/// proposals.csv: one row per image.
+/// proposals.csv: one row per image; `truth` parallel to `rows` (missing rows: 0, 0).
 void write_proposals_csv(const std::vector<ProposalRecord>& rows,
+                         const std::vector<ProposalTruth>& truth,
+                         const std::filesystem::path& path);
+/// published.csv: one row per published solution (numbers with %.10g: ~70k rows a dive).
+void write_published_csv(const std::vector<PublishedSolution>& rows,
                          const std::filesystem::path& path);
 /// information_blocks.csv: the block pattern of `info` (i <= j).
 void write_information_blocks_csv(const core::InformationMatrix& info,

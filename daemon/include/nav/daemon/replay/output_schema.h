@@ -103,9 +103,29 @@ struct LinksCsv {
   static const CsvSchema& schema();
 };
 
-/// proposals.csv: one row per image.
+/// proposals.csv: one row per image; the last two from the registrations' true overlaps
+/// (replay/proposal_recall.h; 0 in a dive without them).
 struct ProposalsCsv {
-  enum Index : std::size_t { kFrameId, kCandidates, kProposed, kAccepted, kCount };
+  enum Index : std::size_t {
+    kFrameId,
+    kCandidates,
+    kProposed,
+    kAccepted,
+    kTrueOverlapping,          ///< true_overlapping: earlier images overlapping >= 20 %
+    kTrueOverlappingProposed,  ///< true_overlapping_proposed: of them proposed
+    kCount
+  };
+  static const CsvSchema& schema();
+};
+
+/// published.csv: the robot's solution as navd publishes it (dive_replay.h PublishedSolution):
+/// t_us, the pose, and the upper triangle c<r><c> (r <= c) of its 6x6 covariance, row-major.
+struct PublishedCsv {
+  enum Index : std::size_t { kTimeUs, kPose, kCovariance = kPose + 6, kCount = kCovariance + 21 };
+  /// Index of covariance cell (row, col), row <= col.
+  static constexpr std::size_t cell(int row, int col) {
+    return kCovariance + static_cast<std::size_t>(row * 6 - row * (row - 1) / 2 + (col - row));
+  }
   static const CsvSchema& schema();
 };
 

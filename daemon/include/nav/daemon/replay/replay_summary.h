@@ -75,6 +75,15 @@ struct ReplaySummary {
   std::uint64_t registrations = 0;          ///< registrations available to the replay
   std::uint64_t registration_outliers = 0;  ///< of them simulated outliers
 
+  // Link proposal (replay/proposal_recall.h): proposed pairs per image, and the fraction of
+  // the pairs whose true footprints overlap >= 20 % that were proposed (simulated dives).
+  double proposals_per_image_mean = kUnset;
+  double proposal_recall = kUnset;
+  // Published covariance against truth (navtool replay with a dive's truth.csv; report
+  // published_nees): mean NEES and the fraction above chi2(6, 0.99) of every published pose.
+  double published_nees_mean = kUnset;
+  double published_nees_exceed_99_fraction = kUnset;
+
   // Consistency of the bounds (final analysis).
   double conservative_fraction = kUnset;
   std::uint64_t states_checked = 0;
