@@ -32,6 +32,7 @@ core::Vec3 read_psd(const YamlReader& r) {
 FilterConfig parse_filter(const YamlReader& f) {
   f.expect_map({"process_noise_psd", "cg_iterations_per_step", "latency_window_ms",
                 "gating_chi2_threshold", "recovery_thread", "recovery_handoff_s",
+                "recovery_preconditioner", "recovery_refresh_interval",
                 "registration_wait_s", "max_pending_registrations", "proposal_min_probability",
                 "proposal_min_overlap", "proposal_max_per_image"});
   FilterConfig filter;
@@ -48,6 +49,15 @@ FilterConfig parse_filter(const YamlReader& f) {
   f.read("gating_chi2_threshold", filter.gating_chi2_threshold, 1e-6, 1e6);
   if (f.has("recovery_thread")) filter.recovery_thread = f.at("recovery_thread").as_bool();
   f.read("recovery_handoff_s", filter.recovery_handoff_s, 0.0, 3600.0);
+  if (f.has("recovery_preconditioner")) {
+    const std::string name = f.at("recovery_preconditioner").as_string();
+    if (name == "factor") {
+      filter.recovery_preconditioner = core::RecoveryPreconditioner::kFactor;
+    } else if (name != "block_jacobi") {
+      f.at("recovery_preconditioner").fail("'" + name + "' must be block_jacobi or factor");
+    }
+  }
+  f.read("recovery_refresh_interval", filter.recovery_refresh_interval, 1, 100000);
   f.read("registration_wait_s", filter.registration_wait_s, 0.0, 3600.0);
   f.read("max_pending_registrations", filter.max_pending_registrations, 1, 100000);
   f.read("proposal_min_probability", filter.proposal_min_probability, 1e-9, 1.0 - 1e-9);

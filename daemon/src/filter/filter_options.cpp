@@ -36,6 +36,8 @@ core::NavFilterOptions filter_options_from_config(const NavdConfig& config) {
   o.process_noise = config.filter.process_noise;
   o.recovery.mode = core::RecoveryMode::kFixedIterations;
   o.recovery.iterations_per_step = config.filter.cg_iterations_per_step;
+  o.recovery.preconditioner = config.filter.recovery_preconditioner;
+  o.recovery.refresh_interval = config.filter.recovery_refresh_interval;
   o.camera_gate_chi2 =
       core::equivalent_chi_square_gate(config.filter.gating_chi2_threshold, 6, 5);
   o.recovery_thread = config.filter.recovery_thread;

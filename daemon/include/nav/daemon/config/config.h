@@ -21,6 +21,7 @@
 #include "nav/core/models/constant_velocity.h"
 #include "nav/daemon/config/vision_config.h"
 #include "nav/daemon/config/config_error.h"
+#include "nav/daemon/config/filter_config.h"
 #include "nav/drivers/config/can_config.h"
 
 namespace nav::daemon {
@@ -114,33 +115,6 @@ struct SensorConfig {
   /// latency_ms: time from validity to the host reading the last byte, subtracted from the
   /// host receive time for sensors whose messages carry no usable device time. [0, 10000]
   double latency_s = 0.0;
-};
-
-struct FilterConfig {
-  core::ConstantVelocityOptions process_noise;  ///< process_noise_psd.{accel, angular_accel}
-  int cg_iterations_per_step = 5;               ///< [1, 1000]
-  double latency_window_ms = 200.0;             ///< [0, 60000]
-  double gating_chi2_threshold = 16.81;         ///< [1e-6, 1e6]; 16.81 = chi2(6 dof, 99 %)
-  /// PCG iterations on the recovery thread (true) or synchronously at each image (false, the
-  /// default: on the 2-core machine the thread made the default dive's replay ~15 % slower,
-  /// README "Recovery thread").
-  bool recovery_thread = false;
-  /// Data time from an image to the measurement at which the filter takes the recovery
-  /// thread's result, s, [0, 3600] (nav/core/navigation/recovery_executor.h; the next image takes
-  /// it earlier: 10 s is past sim.yaml's 8 s image period, so replays overlap a whole period).
-  double recovery_handoff_s = 10.0;
-  /// How long a proposed pair waits for an asynchronous registration after its image's
-  /// receive time, s, [0, 3600] (nav/core/navigation/pending_registrations.h); 0: the
-  /// registration table is complete when the image is processed (replay of a dive log).
-  /// The live mode needs > 0 (its vision stage answers after the image).
-  double registration_wait_s = 0.0;
-  int max_pending_registrations = 256;  ///< bound on the waiting pairs, [1, 100000]
-  /// Link hypotheses (nav/core/navigation/link_proposer.h): a pair is proposed when the
-  /// probability that the footprints overlap by >= proposal_min_overlap reaches
-  /// proposal_min_probability, the most probable proposal_max_per_image per image.
-  double proposal_min_probability = 0.05;  ///< [1e-9, 1 - 1e-9]
-  double proposal_min_overlap = 0.2;       ///< [1e-3, 1]
-  int proposal_max_per_image = 15;         ///< [1, 100000]
 };
 
 struct LcmChannel {
