@@ -17,6 +17,13 @@
 
 namespace nav::core {
 
+/// The default recovery options with the block-Jacobi preconditioner (NavFilter's default).
+inline StateRecoveryOptions block_jacobi_recovery() {
+  StateRecoveryOptions o;
+  o.preconditioner = RecoveryPreconditioner::kBlockJacobi;
+  return o;
+}
+
 struct NavFilterOptions {
   /// One entry per sensor, indexed by MeasurementTime::sensor_index.
   std::vector<SensorModelOptions> sensors;
@@ -34,7 +41,9 @@ struct NavFilterOptions {
   /// Link hypotheses: probability, overlap fraction and per-image cap (link_proposer.h).
   LinkProposerOptions proposal;
   double camera_gate_chi2 = 15.086;        ///< 5-dof gate (chi2 99 %)
-  StateRecoveryOptions recovery;           ///< PCG iterations per image
+  /// PCG iterations per image; block Jacobi by default (the factor preconditioner refactors Λ
+  /// at every image: opt-in, docs/performance.md).
+  StateRecoveryOptions recovery = block_jacobi_recovery();
   BoundsOptions bounds;                    ///< certified (default)
   /// false: the PCG iterations run synchronously at each image (the reference path); true: as
   /// jobs of a RecoveryExecutor on a snapshot, taken at data times (recovery_executor.h).
