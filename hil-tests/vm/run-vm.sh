@@ -3,7 +3,7 @@
 # (hil-tests/vm/README.md). One command:
 #   hil-tests/vm/run-vm.sh [--build DIR] [--cache DIR] [--scenarios a,b,c] [--timeout-s S]
 # --build: the Release build whose bin/navd and bin/navtool are installed (default build);
-# --cache: NAV_VM_CACHE or DIR/vm-cache (base image, kept between runs);
+# --cache: NAV_VM_CACHE or ~/.cache/navd-vm (base image, kept between runs and checkouts);
 # --scenarios: default ready,stop,watchdog,hardening,config_error (hil-tests/vm/guest/scenarios).
 # Prints the times (image, boot, each scenario) and one verdict per scenario; exit 0 when all
 # pass, 1 when one fails or the VM does not finish, 77 (skip) when this machine cannot run the
@@ -24,7 +24,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 build=$(cd "$build" && pwd)
-cache=${cache:-${NAV_VM_CACHE:-$build/vm-cache}}
+cache=${cache:-${NAV_VM_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/navd-vm}}
 skip() { echo "run-vm.sh: SKIP: $*"; exit 77; }
 [ "$(id -u)" = 0 ] || skip "needs root (debootstrap, chroot and file ownership in the image)"
 for tool in qemu-system-x86_64 debootstrap mkfs.ext4; do
