@@ -206,6 +206,9 @@ TEST(StateRecoveryKernels, PackedAndGenericAgreeOverSteps) {
   const Eigen::VectorXd eta = Eigen::VectorXd::Random(lambda.dim());
   StateRecoveryOptions packed_options, generic_options;
   packed_options.iterations_per_step = generic_options.iterations_per_step = 4;
+  // The kernels of the block-Jacobi preconditioner (the factor's have their own tests).
+  packed_options.preconditioner = generic_options.preconditioner =
+      RecoveryPreconditioner::kBlockJacobi;
   generic_options.kernel = RecoveryKernel::kGeneric;
   StateRecovery packed(d, packed_options), generic(d, generic_options);
   ASSERT_TRUE(packed.set_solution(Eigen::MatrixXd::Zero(lambda.dim(), d + 1)).ok());
