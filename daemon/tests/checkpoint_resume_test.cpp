@@ -58,8 +58,10 @@ core::sim::Survey make_survey() {
   return core::sim::simulate_survey(o);
 }
 
+/// navd's default (block Jacobi). Not the factor preconditioner: CHOLMOD's OpenMP thread pool,
+/// once started in this process, deadlocks the fork()ed children that use it again.
 core::StateRecoveryOptions recovery_options() {
-  core::StateRecoveryOptions o;
+  core::StateRecoveryOptions o = core::block_jacobi_recovery();
   o.iterations_per_step = 30;
   return o;
 }
