@@ -156,11 +156,11 @@ TEST(TopsideFoxglove, LinkLineNeedsBothStatesAndColoursByKind) {
 TEST(TopsideClientQueue, DropsOldestWhenFullAndCountsDrops) {
   ClientQueue q(2);
   for (int i = 0; i < 5; ++i) q.push({std::make_shared<const std::string>(std::to_string(i)), false});
-  EXPECT_EQ(q.size(), 2u);
+  EXPECT_EQ(q.queued(), 2u);
   EXPECT_EQ(q.dropped(), 3u);
   EXPECT_EQ(*q.pop().payload, "3");
   EXPECT_EQ(*q.pop().payload, "4");
-  EXPECT_TRUE(q.empty());
+  EXPECT_FALSE(q.has_frames());
   EXPECT_THROW(ClientQueue(0), std::invalid_argument);
 }
 

@@ -87,18 +87,18 @@ Vec6 parse_pose(const std::vector<std::string>& fields, size_t first, const Line
 
 Mat6 parse_information(const std::vector<std::string>& fields, size_t first,
                        const LineContext& ctx) {
-  Mat6 info;
+  Mat6 information;
   size_t f = first;
   for (int r = 0; r < 6; ++r) {
     for (int c = r; c < 6; ++c) {
       const double v = parse_double(fields[f++], "information entry", ctx);
-      info(r, c) = v;
-      info(c, r) = v;
+      information(r, c) = v;
+      information(c, r) = v;
     }
   }
-  Eigen::LLT<Mat6> llt(info);
+  Eigen::LLT<Mat6> llt(information);
   if (llt.info() != Eigen::Success) ctx.fail("information matrix is not positive definite (LLT)");
-  return info;
+  return information;
 }
 
 struct RawEdge {

@@ -40,12 +40,12 @@ float percentile(const cv::Mat& image_32f, double pct, int stride) {
 cv::Mat gaussian_lowpass(const cv::Mat& image_32f, double sigma_px) {
   // A wide Gaussian on a 4x decimated copy, upsampled back: same low-pass to within the
   // bilinear interpolation error at a 16th of the cost.
-  cv::Mat small, blurred, full;
+  cv::Mat small, blurred, full_size;
   cv::resize(image_32f, small, cv::Size(), 0.25, 0.25, cv::INTER_AREA);
   cv::GaussianBlur(small, blurred, cv::Size(), std::max(0.5, sigma_px / 4.0), 0.0,
                    cv::BORDER_REFLECT);
-  cv::resize(blurred, full, image_32f.size(), 0.0, 0.0, cv::INTER_LINEAR);
-  return full;
+  cv::resize(blurred, full_size, image_32f.size(), 0.0, 0.0, cv::INTER_LINEAR);
+  return full_size;
 }
 
 }  // namespace

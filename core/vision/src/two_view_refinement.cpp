@@ -203,8 +203,8 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
           << "); median parallax " << out.median_parallax_px << " px";
       return fail(out, why.str());
     }
-    const int dropped = static_cast<int>(n_front - keep.size());
-    if (round + 1 >= kRounds || dropped > opt.max_fraction_outliers * n_front ||
+    const int n_dropped = static_cast<int>(n_front - keep.size());
+    if (round + 1 >= kRounds || n_dropped > opt.max_fraction_outliers * n_front ||
         static_cast<int>(keep.size()) < opt.min_points) {
       why << out.rejected_outliers << " of " << n_front << " matches rejected as outliers and "
           << out.behind_camera << " behind a camera (" << keep.size() << " left after " << round + 1

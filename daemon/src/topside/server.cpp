@@ -240,7 +240,7 @@ void TopsideServer::Impl::flush_all() {
   flush_pending = false;
   std::lock_guard lock(mutex);
   for (auto& [hdl, c] : clients) {
-    while (!c->queue.empty() && c->con->get_buffered_amount() < options.max_buffered_bytes) {
+    while (c->queue.has_frames() && c->con->get_buffered_amount() < options.max_buffered_bytes) {
       const OutgoingFrame f = c->queue.pop();
       const websocketpp::lib::error_code ec = c->con->send(
           f.payload->data(), f.payload->size(),

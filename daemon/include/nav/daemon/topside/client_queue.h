@@ -33,12 +33,12 @@ class ClientQueue {
     frames_.push_back(std::move(frame));
   }
 
-  bool empty() const { return frames_.empty(); }
-  std::size_t size() const { return frames_.size(); }
+  bool has_frames() const { return !frames_.empty(); }
+  std::size_t queued() const { return frames_.size(); }  ///< frames waiting
   bool full() const { return frames_.size() == capacity_; }
   std::uint64_t dropped() const { return dropped_; }
 
-  /// Removes and returns the oldest frame; precondition: !empty().
+  /// Removes and returns the oldest frame; precondition: has_frames().
   OutgoingFrame pop() {
     OutgoingFrame f = std::move(frames_.front());
     frames_.pop_front();
