@@ -59,22 +59,16 @@ void BM_Features1280x1024Mono12(benchmark::State& state) {
 }
 BENCHMARK(BM_Features1280x1024Mono12)->Unit(benchmark::kMillisecond);
 
-void BM_RegisterPair1280x1024(benchmark::State& state) {
-  cv::setNumThreads(1);
-  const cv::Mat a = twelve_bit_frame("frame_01.png"), b = twelve_bit_frame("frame_03.png");
-  if (a.empty() || b.empty()) {
-    state.SkipWithError("shared data absent (NAV_DATA_DIR)");
-    return;
-  }
-  RegistrationOptions options;
-  options.essential.method = static_cast<RobustMethod>(state.range(0));
-  const Registration registration(test::sim_camera(), options);
-  const ImageFeatures fa = registration.features(a), fb = registration.features(b);
+/// Times register_pair(fa, fb, prior) over the benchmark's iterations and reports the stage
+/// times (mean ms) and the last result's counts as counters.
+void time_register_pair(benchmark::State& state, const Registration& registration,
+                        const ImageFeatures& fa, const ImageFeatures& fb,
+                        const RelativePosePrior* prior) {
   RegistrationResult r;
   RegistrationDiagnostics d;
   StageTimings sum;
   for (auto _ : state) {
-    r = registration.register_pair(fa, fb, nullptr, &d);
+    r = registration.register_pair(fa, fb, prior, &d);
     benchmark::DoNotOptimize(r);
     sum.matching_ms += d.timings.matching_ms;
     sum.essential_ms += d.timings.essential_ms;
@@ -88,6 +82,20 @@ void BM_RegisterPair1280x1024(benchmark::State& state) {
   state.counters["putative"] = r.putative_matches;
   state.counters["comparisons"] = static_cast<double>(r.descriptor_comparisons);
   state.counters["success"] = r.success ? 1 : 0;
+}
+
+void BM_RegisterPair1280x1024(benchmark::State& state) {
+  cv::setNumThreads(1);
+  const cv::Mat a = twelve_bit_frame("frame_01.png"), b = twelve_bit_frame("frame_03.png");
+  if (a.empty() || b.empty()) {
+    state.SkipWithError("shared data absent (NAV_DATA_DIR)");
+    return;
+  }
+  RegistrationOptions options;
+  options.essential.method = static_cast<RobustMethod>(state.range(0));
+  const Registration registration(test::sim_camera(), options);
+  const ImageFeatures fa = registration.features(a), fb = registration.features(b);
+  time_register_pair(state, registration, fa, fb, nullptr);
 }
 BENCHMARK(BM_RegisterPair1280x1024)
     ->Arg(static_cast<int>(RobustMethod::kLmeds))
@@ -132,24 +140,7 @@ void BM_RegisterPairPccs1280x1024(benchmark::State& state) {
     state.SkipWithError("the unconstrained registration giving the prior failed");
     return;
   }
-  RegistrationResult r;
-  RegistrationDiagnostics d;
-  StageTimings sum;
-  for (auto _ : state) {
-    r = registration.register_pair(fa, fb, &prior, &d);
-    benchmark::DoNotOptimize(r);
-    sum.matching_ms += d.timings.matching_ms;
-    sum.essential_ms += d.timings.essential_ms;
-    sum.refinement_ms += d.timings.refinement_ms;
-  }
-  const double n = static_cast<double>(state.iterations());
-  state.counters["match_ms"] = sum.matching_ms / n;
-  state.counters["lmeds_ms"] = sum.essential_ms / n;
-  state.counters["refine_ms"] = sum.refinement_ms / n;
-  state.counters["inliers"] = r.inliers;
-  state.counters["putative"] = r.putative_matches;
-  state.counters["comparisons"] = static_cast<double>(r.descriptor_comparisons);
-  state.counters["success"] = r.success ? 1 : 0;
+  time_register_pair(state, registration, fa, fb, &prior);
 }
 BENCHMARK(BM_RegisterPairPccs1280x1024)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
