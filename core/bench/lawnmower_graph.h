@@ -22,8 +22,8 @@ inline PoseGraph lawnmower_graph(int rows, int cols) {
     return x;
   };
   Mat6 information = Mat6::Identity();
-  information.topLeftCorner<3, 3>() *= 100.0;        // 10 cm
-  information.bottomRightCorner<3, 3>() *= 3.0e3;    // ~1 deg
+  information.topLeftCorner<3, 3>() *= 100.0;      // 10 cm
+  information.bottomRightCorner<3, 3>() *= 3.0e3;  // ~1 deg
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c < cols; ++c) {
       const int id = r * cols + c;

@@ -101,9 +101,15 @@ void BM_FactorRefresh(benchmark::State& state) {
 }
 
 BENCHMARK_CAPTURE(BM_RecoveryToTolerance, block_jacobi, RecoveryPreconditioner::kBlockJacobi)
-    ->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
+    ->Arg(1000)
+    ->Arg(10000)
+    ->Arg(100000)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_RecoveryToTolerance, factor, RecoveryPreconditioner::kFactor)
-    ->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
+    ->Arg(1000)
+    ->Arg(10000)
+    ->Arg(100000)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FactorRefresh)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
 
 }  // namespace
