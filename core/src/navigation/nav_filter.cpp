@@ -5,16 +5,20 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
 #include "nav/core/geometry/rotation.h"
 #include "nav/core/navigation/chi_square.h"
+#include "nav/core/navigation/held_prediction.h"
 
 namespace nav::core {
 namespace {
 
 constexpr double kInitialSigmaFactor = 10.0;
+/// Attitude sigma added by a held prediction step (held_prediction.h): half a turn, i.e. lost.
+constexpr double kLostAttitudeSigmaRad = std::numbers::pi;
 
 Status error(StatusCode code, const std::string& what) {
   return Status::Error(code, "NavFilter: " + what);
@@ -278,6 +282,19 @@ Status NavFilter::predict_once(double dt_s) {
   try {
     f = process_.predict(x, dt_s, &F);
     Q = process_.process_noise(x, dt_s);
+  } catch (const std::domain_error& e) {
+    // Pitch off the model's branch: a held step with the attitude and rates treated as lost
+    // (held_prediction.h) instead of ending the filter; counted, warned at the 1st, 2nd, 4th...
+    const HeldPrediction held = held_prediction(x, dt_s, process_.options(), kLostAttitudeSigmaRad,
+                                                options_.initial_rate_sigma_radps);
+    f = held.x_next;
+    F = held.F;
+    Q = held.Q;
+    const std::uint64_t n = ++counters_.predictions_held;
+    if ((n & (n - 1)) == 0) {
+      warn("NavFilter: prediction at t = " + std::to_string(time_us_) + " us held (" +
+           std::to_string(n) + " so far): " + e.what());
+    }
   } catch (const std::exception& e) {
     return error(StatusCode::kOutOfRange,
                  "prediction at t = " + std::to_string(time_us_) + " us: " + e.what());

@@ -131,10 +131,11 @@ void LinkPublisher::update_board(const daemon::NavFilter& filter) {
   const auto& images = filter.images();
   const daemon::NavFilterCounters& c = filter.counters();
   char line[160];
-  std::snprintf(line, sizeof line, "replay images %llu links %llu gated %llu",
+  std::snprintf(line, sizeof line, "replay images %llu links %llu gated %llu held %llu",
                 static_cast<unsigned long long>(c.images),
                 static_cast<unsigned long long>(c.links_accepted),
-                static_cast<unsigned long long>(c.links_gated));
+                static_cast<unsigned long long>(c.links_gated),
+                static_cast<unsigned long long>(c.predictions_held));
   const std::optional<core::Mat12> robot_only = robot_only_covariance(filter.esdf());
   board_.modify([&](SolutionView& v) {
     v.time_of_validity_us = filter.time_us();
@@ -148,7 +149,7 @@ void LinkPublisher::update_board(const daemon::NavFilter& filter) {
     v.cg_iterations = filter.options().recovery.iterations_per_step;
     v.num_delayed_states = filter.esdf().num_blocks() - 1;
     v.num_camera_links = static_cast<int>(c.links_accepted);
-    v.filter_status = c.update_failures > 0 ? 1 : 0;
+    v.filter_status = c.update_failures > 0 || c.predictions_held > 0 ? 1 : 0;  // degraded
     v.status_line = line;
     v.innovations = filter.innovations().sensors();
     v.has_estimate = true;

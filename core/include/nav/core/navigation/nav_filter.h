@@ -21,6 +21,8 @@
 //   that time. Before each prediction the robot is relinearised in O(1) at its conditional
 //   mean given its neighbours: μ_r = Λ_rr⁻¹(η_r − Σ_j Λ_rj μ_j) (angles not wrapped: μ must
 //   stay on the branch η encodes).
+//   A step the model cannot take (pitch beyond +-89.5 deg) is held instead (held_prediction.h:
+//   attitude and rates treated as lost, counted in predictions_held): the filter goes on.
 // * Update: each aid source's observation is fused into the ESDF and, as a Kalman update of
 //   B_rr, into the robot bound (still an upper bound of Σ_rr), so the bound stored for each new
 //   delayed state stays tight.

@@ -76,7 +76,8 @@ void serialize(Archive& ar, NavFilterCounters& c) {
                            &c.recoveries,        &c.recovery_failures,     &c.candidates,
                            &c.links_proposed,    &c.links_accepted,        &c.links_gated,
                            &c.registration_failed, &c.not_registered,      &c.outliers_rejected,
-                           &c.outliers_accepted, &c.bound_update_failures}) {
+                           &c.outliers_accepted, &c.bound_update_failures,
+                           &c.predictions_held}) {
     ar(*v, "counter");
   }
   ar(c.max_cg_relative_residual, "max_cg_relative_residual");
