@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+#include "nav/core/geometry/pose.h"
+#include "nav/core/geometry/rotation.h"
 #include "nav/core/posegraph/g2o.h"
 #include "nav/core/posegraph/replay.h"
 #include "nav/core/recovery/consistency.h"
@@ -66,6 +68,7 @@ struct TimeOfUse {
   int bounds_checked = 0, bounds_conservative = 0;
   int joints_checked = 0, joints_conservative = 0;
   int markov_blanket_overconfident = 0;
+  int relative_pairs_singular = 0;  ///< pairs without a Fig. 3 value (Euler singularity)
   double worst_min_eigenvalue = 1e300;
   std::vector<double> ours, markov_blanket;
 
@@ -102,6 +105,10 @@ struct TimeOfUse {
       ++joints_checked;
       joints_conservative += conservative(p.joint, joint_exact) ? 1 : 0;
       const core::Vec6 x_i = f.mean_block(i).head<6>();
+      if (at_euler_singularity(x_r, x_i)) {
+        ++relative_pairs_singular;
+        continue;
+      }
       const core::Mat6 rel_exact = core::relative_pose_covariance(joint_exact, x_r, x_i);
       ours.push_back(core::logdet_ratio(core::relative_pose_covariance(p.joint, x_r, x_i),
                                         rel_exact));
@@ -111,6 +118,14 @@ struct TimeOfUse {
       markov_blanket.push_back(core::logdet_ratio(rel_mb, rel_exact));
       if (!core::is_conservative(rel_mb, rel_exact, tolerance)) ++markov_blanket_overconfident;
     }
+  }
+
+  /// The relative-pose covariance is first order in roll-pitch-heading, whose rate matrix is
+  /// singular at pitch +-90 deg (geometry/rotation.h): a pair with either pose or their
+  /// relative pose there has no Fig. 3 value (its bounds and joint are still checked).
+  static bool at_euler_singularity(const core::Vec6& x_r, const core::Vec6& x_i) {
+    return core::pitch_is_singular(x_r[4]) || core::pitch_is_singular(x_i[4]) ||
+           core::pitch_is_singular(core::tail_to_tail(x_r, x_i)[4]);
   }
 };
 
@@ -297,6 +312,7 @@ void run_covariance(const CovarianceArgs& args) {
   out["time_of_use_checks"] = time_of_use.checks;
   out["time_of_use_check_every_steps"] = check_every;
   out["time_of_use_bounds_checked"] = time_of_use.bounds_checked;
+  out["time_of_use_relative_pairs_singular"] = time_of_use.relative_pairs_singular;
   out["time_of_use_conservative_fraction"] =
       time_of_use.bounds_checked > 0
           ? static_cast<double>(time_of_use.bounds_conservative) / time_of_use.bounds_checked
