@@ -25,6 +25,14 @@ std::int64_t kernel_realtime_us() {
   return std::int64_t{ts.tv_sec} * 1'000'000 + ts.tv_nsec / 1000;
 }
 
+/// Replaces `path` by a file holding `text` at once (rename(2)), so that the offset file's
+/// thread never reads it half-written (an empty file is offset 0).
+void write_file(const std::filesystem::path& path, const std::string& text) {
+  const std::filesystem::path tmp = path.string() + ".tmp";
+  std::ofstream(tmp, std::ios::trunc) << text;
+  std::filesystem::rename(tmp, path);
+}
+
 /// Resets the process-wide offset whatever a test does.
 struct OffsetGuard {
   ~OffsetGuard() { drivers::set_realtime_offset_us(0); }
@@ -78,7 +86,7 @@ TEST(ClockOffsetFile, StepsTheProcessRealtimeAloneAndFollowsTheFile) {
   std::filesystem::remove(path);
   ClockOffsetFile file(path, std::chrono::milliseconds(10));
   EXPECT_EQ(drivers::realtime_offset_us(), 0);  // missing file: no offset
-  std::ofstream(path) << "2\n";
+  write_file(path, "2\n");
   file.poll();
   EXPECT_EQ(drivers::realtime_offset_us(), 2'000'000);
   const std::int64_t kernel_before = kernel_realtime_us();
@@ -95,11 +103,11 @@ TEST(ClockOffsetFile, StepsTheProcessRealtimeAloneAndFollowsTheFile) {
       std::abs(monotonic_us() - (std::int64_t{mono.tv_sec} * 1'000'000 + mono.tv_nsec / 1000)),
       100'000);  // monotonic is never offset
   // The thread picks a new value up within its poll period; a malformed file keeps it.
-  std::ofstream(path, std::ios::trunc) << "-2\n";
+  write_file(path, "-2\n");
   for (int i = 0; i < 200 && drivers::realtime_offset_us() != -2'000'000; ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   EXPECT_EQ(drivers::realtime_offset_us(), -2'000'000);
-  std::ofstream(path, std::ios::trunc) << "garbage";
+  write_file(path, "garbage");
   file.poll();
   EXPECT_EQ(drivers::realtime_offset_us(), -2'000'000);
   std::filesystem::remove(path);
