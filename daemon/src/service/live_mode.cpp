@@ -117,7 +117,17 @@ std::string filter_loop(const daemon::NavdConfig& config, daemon::MeasurementQue
   while (!stop.load()) {
     batch.clear();
     queue.pop_bulk(batch, 256);
-    for (const daemon::Measurement& m : batch) ordering.insert(m);
+    for (const daemon::Measurement& m : batch) {
+      const std::optional<std::int64_t> applied_us = ordering.last_released_us();
+      if (ordering.insert(m) == daemon::TimeOrderingBuffer::InsertResult::kDroppedLate) {
+        const core::MeasurementTime& t = core::time_of(m);
+        spdlog::warn(
+            "navd: a measurement of sensor {} dropped as late: valid {} ms before the last "
+            "one applied, received {} ms after its validity (filter.latency_window_ms {})",
+            t.sensor_index, (*applied_us - t.validity_us) / 1000,
+            (t.host_monotonic_us - t.validity_us) / 1000, config.filter.latency_window_ms);
+      }
+    }
     if (live.inbox->has_queued()) {  // registrations before the measurements they may answer
       live.inbox->drain(live.slam->pending_registrations());
     }
