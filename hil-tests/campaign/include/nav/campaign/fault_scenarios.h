@@ -55,7 +55,8 @@ struct FaultScenario {
   /// The watched sensor must come back by itself: its reconnects >= 1 at the end and records
   /// taken after the window (camera_vanish).
   bool must_reconnect = false;
-  /// No measurement may be dropped as late or for a full queue from the window's start on.
+  /// No measurement may be dropped as late or for a full queue in the whole run (navd's exit
+  /// summary: dropped_late, queue_dropped).
   bool no_late_measurements = false;
 };
 
