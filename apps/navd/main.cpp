@@ -5,6 +5,8 @@
 //        a sensor has a hardware transport: the device threads are the source (live_mode.h)
 //   navd --config C --replay DIVE.lcmlog [--speed X | --as-fast-as-possible] [--out DIR]
 //        [--checkpoints]: the dive log is the source (replay_mode.h)
+//   --clock-offset-file F (debugging / HIL): CLOCK_REALTIME is read as the kernel's plus the
+//        seconds in F, re-read every 100 ms (nav/daemon/system/wall_clock.h)
 // A config whose sensors are all simulated (config/sim.yaml) is refused with the command that
 // runs it: `navtool survey` simulates that dive, replays it through the same replay mode and
 // writes the report; navd itself links neither the simulator nor the report.
@@ -16,6 +18,7 @@
 
 #include <CLI/CLI.hpp>
 #include <csignal>
+#include <optional>
 #include <string>
 
 #include "nav/daemon/config/config.h"
@@ -23,6 +26,7 @@
 #include "nav/daemon/service/replay_mode.h"
 #include "nav/daemon/system/sd_notify.h"
 #include "nav/daemon/system/stop_signals.h"
+#include "nav/daemon/system/wall_clock.h"
 
 namespace {
 
@@ -33,10 +37,11 @@ struct Args {
   double speed = 1.0;
   bool as_fast_as_possible = false;
   std::string lcm_url;
-  double duration_s = 0.0;   ///< live mode: 0 until a signal
-  std::string replay;        ///< a dive log to replay
-  std::string out_dir;       ///< replay output directory (replay mode)
-  bool checkpoints = false;  ///< every mode: resume from / write checkpoints
+  double duration_s = 0.0;        ///< live mode: 0 until a signal
+  std::string replay;             ///< a dive log to replay
+  std::string out_dir;            ///< replay output directory (replay mode)
+  bool checkpoints = false;       ///< every mode: resume from / write checkpoints
+  std::string clock_offset_file;  ///< debugging / HIL: the realtime offset seam
 };
 
 void add_options(CLI::App& app, Args& args) {
@@ -56,12 +61,22 @@ void add_options(CLI::App& app, Args& args) {
   app.add_option("--duration-s", args.duration_s,
                  "live mode: stop after this many seconds (0: no limit)")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--clock-offset-file", args.clock_offset_file,
+                 "debugging / HIL: read CLOCK_REALTIME as the kernel's plus the seconds in this "
+                 "file (re-read every 100 ms; missing or empty: 0) to step navd's wall clock "
+                 "alone");
 }
 
 int run(const Args& args, const sigset_t& signals) {
   daemon::NavdConfig config = daemon::load_config_file(args.config_path);
   if (!args.lcm_url.empty()) config.lcm.url = args.lcm_url;
   const daemon::SdNotifier notifier;
+  std::optional<daemon::ClockOffsetFile> clock_offset;
+  if (!args.clock_offset_file.empty()) {
+    spdlog::warn("navd: CLOCK_REALTIME offset by the seconds in {} (--clock-offset-file)",
+                 args.clock_offset_file);
+    clock_offset.emplace(args.clock_offset_file);
+  }
   if (!args.replay.empty()) {
     const daemon::service::ReplayModeArgs replay{.log_path = args.replay,
                                                  .config_path = args.config_path,

@@ -104,8 +104,10 @@ std::string filter_one(LiveFilter& live, const daemon::Measurement& m, LinkPubli
 }
 
 /// The filter thread: queue -> time ordering -> filter until `stop`; the error or "".
+/// `dropped_late`: measurements the ordering refused as older than what the filter has applied.
 std::string filter_loop(const daemon::NavdConfig& config, daemon::MeasurementQueue& queue,
-                        LiveFilter& live, LinkPublisher& links, const std::atomic<bool>& stop) {
+                        LiveFilter& live, LinkPublisher& links, const std::atomic<bool>& stop,
+                        std::uint64_t& dropped_late) {
   daemon::TimeOrderingOptions ordering_options;
   ordering_options.latency_window_us =
       static_cast<std::int64_t>(config.filter.latency_window_ms * 1e3);
@@ -115,13 +117,27 @@ std::string filter_loop(const daemon::NavdConfig& config, daemon::MeasurementQue
   while (!stop.load()) {
     batch.clear();
     queue.pop_bulk(batch, 256);
-    for (const daemon::Measurement& m : batch) ordering.insert(m);
+    for (const daemon::Measurement& m : batch) {
+      const std::optional<std::int64_t> applied_us = ordering.last_released_us();
+      if (ordering.insert(m) == daemon::TimeOrderingBuffer::InsertResult::kDroppedLate) {
+        const core::MeasurementTime& t = core::time_of(m);
+        spdlog::warn(
+            "navd: a measurement of sensor {} dropped as late: valid {} ms before the last "
+            "one applied, received {} ms after its validity (filter.latency_window_ms {})",
+            t.sensor_index, (*applied_us - t.validity_us) / 1000,
+            (t.host_monotonic_us - t.validity_us) / 1000, config.filter.latency_window_ms);
+      }
+    }
     if (live.inbox->has_queued()) {  // registrations before the measurements they may answer
       live.inbox->drain(live.slam->pending_registrations());
     }
     while (std::optional<daemon::Measurement> m = ordering.pop_ready()) {
-      if (std::string error = filter_one(live, *m, links); !error.empty()) return error;
+      if (std::string error = filter_one(live, *m, links); !error.empty()) {
+        dropped_late = ordering.stats().dropped_late;
+        return error;
+      }
     }
+    dropped_late = ordering.stats().dropped_late;
     if (batch.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   if (live.checkpointer) live.checkpointer->shutdown(*live.slam);
@@ -188,9 +204,8 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
   devices.attach(publisher);
   publisher.set_vision(live.vision.get());
   RegistrationListener registrations(config.lcm, *live.inbox, std::move(key));
-  publisher.set_health_fields([&](navlcm::health_t& h) {
-    fill_registration_health(*live.inbox, registrations, h);
-  });
+  publisher.set_health_fields(
+      [&](navlcm::health_t& h) { fill_registration_health(*live.inbox, registrations, h); });
   if (config.filter.registration_wait_s <= 0.0) {
     spdlog::warn(
         "navd: filter.registration_wait_s is 0: proposed pairs do not wait for the "
@@ -198,11 +213,12 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
   }
 
   std::atomic<bool> stop{false}, filter_done{false};
+  std::uint64_t dropped_late = 0;  ///< the filter thread's; read after it is joined
   std::string failure;
   const auto start = Clock::now();
   std::thread filter_thread([&] {
     try {
-      failure = filter_loop(config, queue, live, links, stop);
+      failure = filter_loop(config, queue, live, links, stop, dropped_late);
     } catch (const std::exception& e) {
       failure = e.what();
     }
@@ -225,10 +241,11 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
   const daemon::NavFilterCounters& counters = live.slam->counters();
   std::printf(
       "{\"mode\":\"live\",\"measurements\":%llu,\"images\":%zu,\"links\":%zu,"
-      "\"devices\":%zu,\"queue_dropped\":%llu,\"wall_s\":%.3f%s}\n",
+      "\"devices\":%zu,\"queue_dropped\":%llu,\"dropped_late\":%llu,\"wall_s\":%.3f%s}\n",
       static_cast<unsigned long long>(counters.measurements), live.slam->images().size(),
       live.slam->links().size(), device_threads,
-      static_cast<unsigned long long>(queue.total_dropped()), seconds_since(start),
+      static_cast<unsigned long long>(queue.total_dropped()),
+      static_cast<unsigned long long>(dropped_late), seconds_since(start),
       registration_summary_json(*live.inbox, registrations, *live.slam).c_str());
   std::fflush(stdout);
   const int code = failure.empty() ? 0 : 1;

@@ -71,6 +71,19 @@ void Publisher::publish_solution(const SolutionView& view) {
   }
 }
 
+std::string Publisher::wall_clock_status() {
+  const std::int64_t monotonic = daemon::monotonic_us();
+  if (const auto jump = wall_clock_.update(monotonic, daemon::realtime_us())) {
+    spdlog::warn(
+        "navd: wall clock (CLOCK_REALTIME) jumped by {:+.3f} s against CLOCK_MONOTONIC; "
+        "measurements stay ordered by CLOCK_MONOTONIC, LCM utimes follow the wall clock",
+        *jump * 1e-6);
+  }
+  if (wall_clock_.jumps() == 0) return {};
+  return fmt::format("; wall clock jumped {} time(s), last {:+.3f} s", wall_clock_.jumps(),
+                     wall_clock_.last_jump_us() * 1e-6);
+}
+
 void Publisher::publish_health(const SolutionView& view) {
   if (!good()) return;
   navlcm::health_t msg{};
@@ -87,7 +100,7 @@ void Publisher::publish_health(const SolutionView& view) {
   msg.cpu_percent = usage.cpu_percent;
   msg.rss_mb = usage.rss_mb;
   msg.peak_rss_mb = usage.peak_rss_mb;
-  msg.status = view.status_line;
+  msg.status = view.status_line + wall_clock_status();
   if (vision_ != nullptr) {
     const daemon::vision::VisionWorkerCounters v = vision_->stats().worker;
     msg.vision_queue_depth = static_cast<std::int32_t>(v.queue_depth);

@@ -25,14 +25,6 @@ cv::Mat as_16bit(const cv::Mat& image) {
   return out;
 }
 
-std::int64_t validity_of(const drivers::CameraFrame& f, std::int64_t latency_us) {
-  const std::int64_t arrival_mono =
-      f.arrival_realtime_us
-          ? *f.arrival_realtime_us - (f.time.host.realtime_us - f.time.host.monotonic_us)
-          : f.time.host.monotonic_us;
-  return std::min(arrival_mono, f.time.host.monotonic_us) - latency_us;
-}
-
 void sleep_unless_stopped(std::chrono::milliseconds duration, const std::atomic<bool>& stop) {
   const auto end = Clock::now() + duration;
   while (!stop.load() && Clock::now() < end) {
@@ -60,7 +52,7 @@ class CameraLoop {
     h.messages.fetch_add(1, kRelaxed);
     h.bytes.fetch_add(frame.image.total() * frame.image.elemSize(), kRelaxed);
     h.last_message_monotonic_us.store(frame.time.host.monotonic_us, kRelaxed);
-    const std::int64_t validity = validity_of(frame, latency_us_);
+    const std::int64_t validity = camera_validity_us(frame, latency_us_);
     std::string file_path;
     if (!image_dir_.empty()) {
       const std::string name = frame_png_name(frame.frame_id);
@@ -140,6 +132,21 @@ class CameraLoop {
 };
 
 }  // namespace
+
+std::int64_t camera_validity_us(const drivers::CameraFrame& f, std::int64_t latency_us) {
+  const std::int64_t grab_mono = f.time.host.monotonic_us;
+  std::int64_t arrival_mono = grab_mono;
+  if (f.arrival_realtime_us) {
+    arrival_mono = *f.arrival_realtime_us - (f.time.host.realtime_us - grab_mono);
+    // A wall clock step between the arrival and the grab moves the conversion by the step:
+    // later than the grab is impossible, earlier than kMaxArrivalBeforeGrabUs is not a frame
+    // the loop was waiting on. Either way the grab's own monotonic time is the better one.
+    if (arrival_mono > grab_mono || arrival_mono < grab_mono - kMaxArrivalBeforeGrabUs) {
+      arrival_mono = grab_mono;
+    }
+  }
+  return arrival_mono - latency_us;
+}
 
 navlcm::image_metadata_t image_metadata(const drivers::CameraFrame& frame, std::int64_t validity_us,
                                         const std::string& file_path, int thumbnail_width_px) {

@@ -294,9 +294,11 @@ IoStatus GigeCamera::unpack_buffer(_ArvBuffer* buffer, CameraFrame& frame,
   frame.time.sensor_time_us = device_ns != 0
                                   ? std::optional<int64_t>(static_cast<int64_t>(device_ns / 1000))
                                   : std::nullopt;
-  frame.arrival_realtime_us = system_ns != 0
-                                  ? std::optional<int64_t>(static_cast<int64_t>(system_ns / 1000))
-                                  : std::nullopt;
+  // Aravis stamps with the kernel's CLOCK_REALTIME: moved onto host_time_now()'s (timestamps.h).
+  frame.arrival_realtime_us =
+      system_ns != 0
+          ? std::optional<int64_t>(static_cast<int64_t>(system_ns / 1000) + realtime_offset_us())
+          : std::nullopt;
   ++stats_.frames;
   return IoStatus::Ok();
 }

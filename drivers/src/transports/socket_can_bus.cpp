@@ -184,7 +184,8 @@ IoStatus SocketCanBus::receive_one(CanFrame& frame, bool& accepted) {
     if (c->cmsg_type == SCM_TIMESTAMPNS) {
       timespec ts{};
       std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
-      kernel_us = static_cast<int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1'000;
+      kernel_us = static_cast<int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1'000 +
+                  realtime_offset_us();  // on host_time_now()'s realtime (timestamps.h)
     } else if (c->cmsg_type == SO_RXQ_OVFL) {
       uint32_t drops = 0;
       std::memcpy(&drops, CMSG_DATA(c), sizeof drops);

@@ -65,6 +65,7 @@ void judge(const FaultScenario& scenario, ScenarioResult& r) {
   if (r.delayed_states_lost > 0) {
     fail(std::to_string(r.delayed_states_lost) + " delayed states lost");
   }
+  if (!r.scenario_failures.empty()) fail(r.scenario_failures);
   r.pass = why.empty();
   r.reason = why;
 }

@@ -38,6 +38,28 @@ FaultScenario host_fault(std::string name, std::string description, HostFault ho
   return s;
 }
 
+/// The played GigE camera destroyed for the window and started again (player_faults.h).
+FaultScenario camera_vanish(std::string name, double from_s, double to_s) {
+  FaultScenario s = sensor_fault(std::move(name), "", FaultKind::kCameraVanish, "camera", from_s,
+                                 to_s, 0, Detector::kDisconnected);
+  s.description =
+      "fake GigE camera destroyed for " + std::to_string(int(to_s - from_s)) + " s, started again";
+  s.must_reconnect = true;
+  s.no_late_measurements = true;
+  return s;
+}
+
+/// navd's wall clock stepped by `step_s` at `from_s` (it stays stepped).
+FaultScenario clock_step(std::string name, double step_s, double from_s, double to_s) {
+  FaultScenario s = host_fault(std::move(name), "", HostFault::kClockStep, from_s, to_s);
+  s.description = std::string("navd's CLOCK_REALTIME stepped ") + (step_s > 0 ? "+" : "-") +
+                  std::to_string(int(std::abs(step_s))) + " s (CLOCK_MONOTONIC runs on)";
+  s.clock_step_s = step_s;
+  s.detector = Detector::kWallClockJump;
+  s.no_late_measurements = true;
+  return s;
+}
+
 }  // namespace
 
 const char* to_string(HostFault fault) {
@@ -52,6 +74,8 @@ const char* to_string(HostFault fault) {
       return "checkpoint_disk_full";
     case HostFault::kKillRestart:
       return "kill_restart";
+    case HostFault::kClockStep:
+      return "clock_step";
   }
   return "?";
 }
@@ -64,6 +88,8 @@ const char* to_string(Detector detector) {
       return "!connected or reconnects++";
     case Detector::kRejected:
       return "rejected_updates++ / decode_errors++ / nis_mean > 4 x expected";
+    case Detector::kWallClockJump:
+      return "status: wall clock jumped";
     case Detector::kNone:
       return "-";
   }
@@ -102,6 +128,9 @@ std::vector<FaultScenario> standard_scenarios(bool short_version) {
       host_fault("sigkill_restart", "SIGKILL at a random moment, restart with --checkpoints",
                  HostFault::kKillRestart, 40, 70)};
   s[1].long_dive = true;
+  s.push_back(camera_vanish("camera_vanish_30s", 30, 60));
+  s.push_back(clock_step("clock_step_+2s", +2.0, 30, 50));
+  s.push_back(clock_step("clock_step_-2s", -2.0, 30, 50));
   return s;
 }
 

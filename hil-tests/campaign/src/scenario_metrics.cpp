@@ -63,6 +63,7 @@ std::string detector_field(Detector d, const navlcm::sensor_health_t& now,
                       now.nis_expected);
       }
       break;
+    case Detector::kWallClockJump:  // health_t.status, not a sensor's (fill_detection)
     case Detector::kNone:
       break;
   }
@@ -135,6 +136,17 @@ void fill_track_metrics(const Recording& rec, const TruthTrack& truth, const Tim
 void fill_detection(const Recording& rec, std::int64_t fault_realtime_us,
                     const FaultScenario& scenario, ScenarioResult& out) {
   if (scenario.detector == Detector::kNone) return;
+  if (scenario.detector == Detector::kWallClockJump) {
+    for (std::size_t i = 0; i < rec.health.size() && i < rec.health_received_us.size(); ++i) {
+      const std::string& status = rec.health[i].status;
+      const auto at = status.find("wall clock jumped");
+      if (rec.health_received_us[i] < fault_realtime_us || at == std::string::npos) continue;
+      out.detected_after_s = (rec.health_received_us[i] - fault_realtime_us) * 1e-6;
+      out.detected_by = "status: " + status.substr(at);
+      return;
+    }
+    return;
+  }
   const navlcm::sensor_health_t* before = nullptr;
   for (const navlcm::health_t& h : rec.health) {
     const navlcm::sensor_health_t* now = find_sensor(h, scenario.sensor);
@@ -149,6 +161,16 @@ void fill_detection(const Recording& rec, std::int64_t fault_realtime_us,
       return;
     }
   }
+}
+
+const navlcm::sensor_health_t* sensor_at(const Recording& rec, const std::string& sensor,
+                                         std::int64_t realtime_us) {
+  const navlcm::sensor_health_t* found = nullptr;
+  for (std::size_t i = 0; i < rec.health.size() && i < rec.health_received_us.size(); ++i) {
+    if (rec.health_received_us[i] >= realtime_us) break;
+    found = find_sensor(rec.health[i], sensor);
+  }
+  return found;
 }
 
 void write_health_csv(const Recording& rec, const std::filesystem::path& path) {

@@ -20,6 +20,7 @@ namespace nav::campaign {
 struct Recording {
   std::vector<navlcm::nav_solution_t> solutions;  ///< filter_status != 2 (initialised)
   std::vector<navlcm::health_t> health;
+  std::vector<std::int64_t> health_received_us;  ///< the campaign's CLOCK_REALTIME at receipt
   std::optional<navlcm::bounds_snapshot_t> last_snapshot;
 };
 
@@ -55,6 +56,11 @@ void fill_track_metrics(const Recording& rec, const TruthTrack& truth, const Tim
 /// meeting the scenario's Detector (counters compared with the last message before it).
 void fill_detection(const Recording& rec, std::int64_t fault_realtime_us,
                     const FaultScenario& scenario, ScenarioResult& out);
+
+/// Of the newest health message received before `realtime_us` (the campaign's clock), the
+/// sensor's counters; nullptr when there is none (or it lacks the sensor).
+const navlcm::sensor_health_t* sensor_at(const Recording& rec, const std::string& sensor,
+                                         std::int64_t realtime_us);
 
 /// The health messages as CSV (utime, queue_depth, cpu_percent, rss_mb, then per sensor
 /// connected, last_message_age_s, records, decode_errors, reconnects, rejected_updates,

@@ -77,6 +77,7 @@ class Listener {
   void on_health(const lcm::ReceiveBuffer*, const std::string&, const navlcm::health_t* m) {
     std::lock_guard<std::mutex> lock(mutex_);
     rec_.health.push_back(*m);
+    rec_.health_received_us.push_back(daemon::realtime_us());  // this process: never offset
   }
   void on_snapshot(const lcm::ReceiveBuffer*, const std::string&,
                    const navlcm::bounds_snapshot_t* m) {
@@ -101,6 +102,26 @@ void write_config(const hil::DivePlayer& player, const fs::path& path, const std
   if (!out) throw std::runtime_error(path.string() + ": cannot write the navd config");
 }
 
+/// navd's --clock-offset-file (wall_clock.h) holding `seconds`; "" or why not.
+std::string write_clock_offset(const fs::path& path, double seconds) {
+  const fs::path tmp = path.string() + ".tmp";
+  { std::ofstream(tmp, std::ios::trunc) << seconds << "\n"; }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);  // navd never reads a half-written file
+  return ec ? "cannot write " + path.string() + ": " + ec.message() : std::string();
+}
+
+/// navd's exit summary line (live_mode.h: {"mode":"live",...}) from its stdout; null if none.
+nlohmann::json navd_summary(const fs::path& stdout_path) {
+  std::ifstream in(stdout_path);
+  nlohmann::json last;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("{\"mode\":\"live\"", 0) != 0) continue;
+    last = nlohmann::json::parse(line, nullptr, false);
+  }
+  return last.is_discarded() ? nlohmann::json() : last;
+}
+
 /// The host fault's start / end, on the main thread.
 struct HostAction {
   const FaultScenario& scenario;
@@ -123,6 +144,9 @@ struct HostAction {
         break;
       case HostFault::kCheckpointDiskFull:
         note(fill_until_full(checkpoints / "filler"));
+        break;
+      case HostFault::kClockStep:
+        note(write_clock_offset(dir / "clock_offset", scenario.clock_step_s));
         break;
       default:
         break;
@@ -230,6 +254,54 @@ fs::path prepare_dir(const FaultScenario& scenario, const ScenarioSetup& setup,
   return dir;
 }
 
+void action_note(ScenarioResult& out, const std::string& what) {
+  out.notes += (out.notes.empty() ? "" : "; ") + what;
+}
+
+void add_failure(ScenarioResult& out, const std::string& what) {
+  out.scenario_failures += (out.scenario_failures.empty() ? "" : "; ") + what;
+}
+
+/// must_reconnect: the sensor's images / records before, during and after the window (health
+/// received before the fault, before its end, last) and its reconnects; the player's images.
+void check_reconnect(const FaultScenario& scenario, const Recording& rec, const Timeline& t,
+                     const hil::PlayReport& report, ScenarioResult& out) {
+  const auto* before = sensor_at(rec, scenario.sensor, t.fault_realtime_us);
+  const auto* window_end = sensor_at(rec, scenario.sensor, t.end_realtime_us);
+  const auto* last = sensor_at(rec, scenario.sensor, INT64_MAX);
+  if (before == nullptr || window_end == nullptr || last == nullptr) {
+    add_failure(out, scenario.sensor + " not in health before, during and after the window");
+    return;
+  }
+  const std::int64_t during = window_end->records - before->records;
+  const std::int64_t after = last->records - window_end->records;
+  action_note(out, scenario.sensor + " records before / during / after: " +
+                       std::to_string(before->records) + " / " + std::to_string(during) + " / " +
+                       std::to_string(after) + ", reconnects " + std::to_string(last->reconnects) +
+                       "; played " + std::to_string(report.camera.images) + " images, " +
+                       std::to_string(report.camera.vanished) + " due while gone, " +
+                       std::to_string(report.camera.sent) + " sent");
+  if (!report.camera.reappear_error.empty())
+    add_failure(out, "camera not restarted: " + report.camera.reappear_error);
+  if (last->reconnects < 1) add_failure(out, scenario.sensor + " did not reconnect");
+  if (after < 1) add_failure(out, "no " + scenario.sensor + " record after the window");
+}
+
+/// no_late_measurements: navd's exit summary (dropped_late, queue_dropped).
+void check_no_late(const fs::path& dir, ScenarioResult& out) {
+  const nlohmann::json summary = navd_summary(dir / "navd.stdout");
+  if (!summary.contains("dropped_late") || !summary.contains("queue_dropped")) {
+    add_failure(out, "no exit summary with dropped_late in navd.stdout");
+    return;
+  }
+  const auto late = summary["dropped_late"].get<long long>();
+  const auto dropped = summary["queue_dropped"].get<long long>();
+  action_note(out, "navd dropped_late " + std::to_string(late) + ", queue_dropped " +
+                       std::to_string(dropped));
+  if (late > 0) add_failure(out, std::to_string(late) + " measurements dropped as late");
+  if (dropped > 0) add_failure(out, std::to_string(dropped) + " measurements dropped (queue)");
+}
+
 /// The measurements from the recording, the CSVs, the verdict.
 void measure(const FaultScenario& scenario, const ScenarioSetup& setup, const fs::path& dir,
              const TimeMap& map, std::int64_t fault_realtime_us, const Recording& rec,
@@ -270,6 +342,9 @@ ScenarioResult run_scenario(const FaultScenario& scenario, const ScenarioSetup& 
 
   Listener listener(setup.lcm_url);
   Navd navd{setup, {"--config", (dir / "navd.yaml").string(), "--checkpoints"}, dir};
+  if (scenario.host == HostFault::kClockStep) {
+    navd.args.insert(navd.args.end(), {"--clock-offset-file", (dir / "clock_offset").string()});
+  }
   navd.start();
   std::atomic<bool> stop_play{false}, played{false};
   hil::PlayReport report;
@@ -300,6 +375,8 @@ ScenarioResult run_scenario(const FaultScenario& scenario, const ScenarioSetup& 
     out.reason = "navd never opened the played devices";
     return out;
   }
+  if (scenario.must_reconnect) check_reconnect(scenario, rec, timeline, report, out);
+  if (scenario.no_late_measurements) check_no_late(dir, out);
   measure(scenario, setup, dir, map, timeline.fault_realtime_us, rec, out);
   return out;
 }

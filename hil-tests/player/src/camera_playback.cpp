@@ -5,12 +5,13 @@
 #include <spdlog/spdlog.h>
 #include <time.h>
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/imgcodecs.hpp>
 #include <variant>
 
-#include "nav/daemon/system/host_clock.h"
 #include "nav/daemon/log/dive_log.h"
+#include "nav/daemon/system/host_clock.h"
 
 namespace nav::hil {
 namespace {
@@ -26,10 +27,11 @@ cv::Mat load_frame(const std::filesystem::path& path) {
 
 CameraPlayback::CameraPlayback(FakeGigeCamera& camera, std::filesystem::path log_path,
                                std::filesystem::path dive_dir, double latency_s,
-                               std::int64_t lead_us)
+                               std::vector<PlayerFault> vanish, std::int64_t lead_us)
     : camera_(camera),
       log_path_(std::move(log_path)),
       dive_dir_(std::move(dive_dir)),
+      vanish_(std::move(vanish)),
       latency_us_(std::llround(latency_s * 1e6)),
       lead_us_(lead_us) {}
 
@@ -54,6 +56,9 @@ CameraPlayReport CameraPlayback::finish(const std::atomic<bool>& stop) {
   }
   stop_.store(true);
   if (thread_.joinable()) thread_.join();
+  if (!camera_.running() && report_.reappear_error.empty()) {
+    report_.reappear_error = camera_.reappear();  // a window past the last image: end it
+  }
   const FakeCameraStats s = camera_.stats();
   CameraPlayReport r = report_;
   r.sent = s.sent;
@@ -61,6 +66,41 @@ CameraPlayReport CameraPlayback::finish(const std::atomic<bool>& stop) {
   r.max_send_late_s = s.max_late_s;
   r.mean_send_late_s = s.mean_late_s;
   return r;
+}
+
+bool CameraPlayback::gone_at(std::int64_t t_us) const {
+  const double dive_s = (t_us - host_start_us_) * 1e-6 * speed_;
+  return std::any_of(vanish_.begin(), vanish_.end(),
+                     [&](const PlayerFault& f) { return f.active(dive_s); });
+}
+
+void CameraPlayback::follow_windows() {
+  const bool gone = gone_at(daemon::monotonic_us());
+  if (gone && camera_.running()) {
+    camera_.vanish();
+    ++report_.vanishes;
+  } else if (!gone && !camera_.running()) {
+    const std::string why = camera_.reappear();
+    if (!why.empty() && report_.reappear_error.empty()) report_.reappear_error = why;
+  }
+}
+
+bool CameraPlayback::wait_until(std::int64_t until_us) {
+  for (;;) {
+    follow_windows();
+    std::int64_t next = until_us;  // the nearest window edge before `until_us`
+    for (const PlayerFault& f : vanish_) {
+      for (const double edge_s : {f.from_s, f.to_s}) {
+        const std::int64_t edge = host_start_us_ + std::llround(edge_s * 1e6 / speed_);
+        if (edge > daemon::monotonic_us() && edge < next) next = edge;
+      }
+    }
+    if (!daemon::sleep_until_monotonic_us(next, stop_)) return false;
+    if (next == until_us) {
+      follow_windows();
+      return true;
+    }
+  }
 }
 
 void CameraPlayback::run() {
@@ -79,9 +119,13 @@ void CameraPlayback::run() {
       const double offset_us =
           static_cast<double>(image->time_of_validity_us + latency_us_ - dive_start_us_);
       const std::int64_t due_us = host_start_us_ + std::llround(offset_us / speed_);
-      if (!daemon::sleep_until_monotonic_us(due_us - lead_us_, stop_)) break;
-      if (!frame.empty()) ++report_.with_frame;
+      if (!wait_until(due_us - lead_us_)) break;
       ++report_.images;
+      if (gone_at(due_us - lead_us_) || gone_at(due_us) || !camera_.running()) {
+        ++report_.vanished;  // the camera is gone when this frame is due
+        continue;
+      }
+      if (!frame.empty()) ++report_.with_frame;
       camera_.fire(std::move(frame), due_us);
     }
     // Let the last frame go out (the fake acts on a trigger within ~100 ms of its due time).

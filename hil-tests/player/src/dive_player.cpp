@@ -172,8 +172,12 @@ void DivePlayer::Impl::plan_camera(const daemon::SensorConfig& sensor, PlayedSen
     p.output = SensorOutput::kGige;
     p.device = FakeGigeCamera::kAddress;
     p.note = "Aravis fake GigE camera on lo, triggered at the dive's image times";
+    std::vector<PlayerFault> vanish;
+    for (const PlayerFault& f : options.faults) {
+      if (f.kind == FaultKind::kCameraVanish && f.sensor == sensor.name) vanish.push_back(f);
+    }
     camera_playback = std::make_unique<CameraPlayback>(camera, log_path, config_path.parent_path(),
-                                                       sensor.latency_s);
+                                                       sensor.latency_s, std::move(vanish));
   }
 }
 

@@ -86,6 +86,9 @@ std::string FakeGigeCamera::start(const std::string& serial, int width_px, int h
     return "frame " + std::to_string(width_px) + " x " + std::to_string(height_px) +
            " px does not fit the fake's 2048 x 2048 sensor";
   }
+  serial_ = serial;
+  width_px_ = width_px;
+  height_px_ = height_px;
   std::string why;
   const std::string xml = hil_genicam_xml(why);
   if (xml.empty()) return why;
@@ -107,6 +110,21 @@ std::string FakeGigeCamera::start(const std::string& serial, int width_px, int h
                                  ARV_PIXEL_FORMAT_MONO_12_PACKED);
   arv_fake_camera_set_fill_pattern(fake, &fill, this);
   return {};
+}
+
+void FakeGigeCamera::vanish() {
+  if (camera_ == nullptr) return;
+  g_object_unref(static_cast<ArvGvFakeCamera*>(camera_));  // joins the fake's thread
+  camera_ = nullptr;
+  std::lock_guard lock(mutex_);
+  pending_ = false;
+  pending_image_ = cv::Mat();
+}
+
+std::string FakeGigeCamera::reappear() {
+  if (camera_ != nullptr) return {};
+  if (serial_.empty()) return "the fake GigE camera was never started";
+  return start(serial_, width_px_, height_px_);
 }
 
 void FakeGigeCamera::fire(cv::Mat image, std::int64_t due_monotonic_us) {

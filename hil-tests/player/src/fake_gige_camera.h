@@ -15,8 +15,9 @@
 // wake-up), not at the fake's tick. The frame's pixels are the image given to fire(), or, with
 // none, a 12-bit test pattern that changes with the frame number.
 //
-// Threads: start()/fire()/stats() from the player's threads; the fill callback on Aravis' fake
-// camera thread. A mutex guards the pending frame.
+// Threads: start()/fire()/stats() from the player's threads, vanish()/reappear() from the one
+// that fires; the fill callback on Aravis' fake camera thread (joined by vanish()). A mutex
+// guards the pending frame.
 
 #include <atomic>
 #include <cstdint>
@@ -51,6 +52,11 @@ class FakeGigeCamera {
   /// keeps the camera's region); "" on success, else why not.
   std::string start(const std::string& serial, int width_px = 1280, int height_px = 1024);
   bool running() const { return camera_ != nullptr; }
+  /// Destroys the fake (its GVCP and GVSP sockets close, its thread ends): the camera vanishes
+  /// from the network; a pending fire() is dropped. No-op when not running.
+  void vanish();
+  /// Starts it again with start()'s last serial and frame size; "" or why not.
+  std::string reappear();
   /// The address navd opens it by.
   static constexpr const char* kAddress = "127.0.0.1";
 
@@ -71,6 +77,8 @@ class FakeGigeCamera {
   void fill_buffer(_ArvBuffer* buffer, std::uint32_t pixel_format);
 
   void* camera_ = nullptr;  ///< ArvGvFakeCamera*
+  std::string serial_;
+  int width_px_ = 0, height_px_ = 0;
   std::filesystem::path genicam_path_;
   mutable std::mutex mutex_;
   bool pending_ = false;

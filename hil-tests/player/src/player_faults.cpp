@@ -38,6 +38,8 @@ const char* to_string(FaultKind kind) {
       return "depth_spike";
     case FaultKind::kUnplug:
       return "unplug";
+    case FaultKind::kCameraVanish:
+      return "camera_vanish";
   }
   return "?";
 }
@@ -103,6 +105,7 @@ std::vector<std::uint8_t> apply_fault(const PlayerFault& fault, std::span<const 
   switch (fault.kind) {
     case FaultKind::kDrop:
     case FaultKind::kUnplug:
+    case FaultKind::kCameraVanish:
       return {};
     case FaultKind::kGarbage:
       changed = pd0_with_garbage_velocity(bytes, fault.value, static_cast<std::uint64_t>(count));

@@ -3,6 +3,8 @@
 // configured channels at the configured rates (config lcm.channels). Pose covariance is the
 // 6x6 [x y z roll pitch heading] block of the recovered robot covariance Σ_rr. health_t's CPU %
 // is over the interval since the previous health_t (process_usage.h), RSS and peak RSS as read.
+// A wall clock step seen between two health_t (wall_clock.h) is logged and, from then on,
+// health_t.status ends with "; wall clock jumped N time(s), last +S.SSS s".
 
 #include <atomic>
 #include <cstdint>
@@ -12,10 +14,11 @@
 
 #include "nav/daemon/config/config.h"
 #include "nav/daemon/queue/measurement_queue.h"
-#include "nav/daemon/system/process_usage.h"
 #include "nav/daemon/service/health_innovations.h"
 #include "nav/daemon/service/solution_board.h"
 #include "nav/daemon/sources/sensor_health.h"
+#include "nav/daemon/system/process_usage.h"
+#include "nav/daemon/system/wall_clock.h"
 #include "nav/daemon/vision/vision_link.h"
 
 namespace lcm {
@@ -56,6 +59,8 @@ class Publisher {
  private:
   void publish_solution(const SolutionView& view);
   void publish_health(const SolutionView& view);
+  /// "" until a wall clock jump was seen, then its status suffix (and the jump logged).
+  std::string wall_clock_status();
 
   daemon::LcmConfig config_;
   const SolutionBoard& board_;
@@ -64,8 +69,9 @@ class Publisher {
   const daemon::vision::VisionLink* vision_ = nullptr;
   std::function<void(navlcm::health_t&)> health_fields_;
   std::unique_ptr<lcm::LCM> lcm_;
-  daemon::ProcessUsageMeter usage_;  ///< CPU % since the previous health_t
-  HealthInnovations innovations_;    ///< NIS means since the previous health_t
+  daemon::ProcessUsageMeter usage_;          ///< CPU % since the previous health_t
+  HealthInnovations innovations_;            ///< NIS means since the previous health_t
+  daemon::WallClockJumpMonitor wall_clock_;  ///< sampled at every health_t
   PublisherCounters counters_;
 };
 

@@ -8,8 +8,10 @@
 // (hil-tests/README.md "A dive directory").
 //
 // Time of validity: the back end's arrival time stamp (CLOCK_REALTIME, moved onto
-// CLOCK_MONOTONIC with the offset sampled at grab) when it has one, else the grab's host
-// monotonic time, minus the sensor's latency_ms (exposure mid-time to arrival).
+// CLOCK_MONOTONIC with the offset sampled at grab) when it has one and it is at most
+// kMaxArrivalBeforeGrabUs before the grab and not after it (else a wall clock step fell between
+// them), else the grab's host monotonic time, minus the sensor's latency_ms (exposure mid-time
+// to arrival).
 // Software trigger: with camera.trigger = software the loop triggers at frame_rate_hz.
 // Reconnection: a grab error other than a timeout closes the camera; the opener is called again
 // with backoff (DeviceLoopOptions), counted as in device_source.h.
@@ -42,6 +44,13 @@ struct CameraContext {
 };
 
 void run_camera_device(const CameraOpener& open, CameraContext& context);
+
+/// Longest a frame's arrival stamp may precede its grab (camera_validity_us): the loop grabs
+/// as frames arrive, so 1 s is generous and far below a wall clock step worth noticing.
+inline constexpr std::int64_t kMaxArrivalBeforeGrabUs = 1'000'000;
+
+/// The frame's time of validity on CLOCK_MONOTONIC (file comment), µs.
+std::int64_t camera_validity_us(const drivers::CameraFrame& frame, std::int64_t latency_us);
 
 /// The image_metadata_t of a frame (thumbnail included); `file_path` as given.
 navlcm::image_metadata_t image_metadata(const drivers::CameraFrame& frame, std::int64_t validity_us,

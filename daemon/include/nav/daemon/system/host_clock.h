@@ -1,10 +1,14 @@
 #pragma once
 // The host clocks in microseconds: CLOCK_MONOTONIC (what measurements are stamped with on
-// receipt, pacing) and CLOCK_REALTIME (LCM utimes), and a stoppable sleep on the monotonic one.
+// receipt, pacing) and CLOCK_REALTIME (LCM utimes) plus the process's realtime offset
+// (nav/drivers/time/timestamps.h: 0 unless navd's --clock-offset-file sets it), and a
+// stoppable sleep on the monotonic one.
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
 #include <ctime>
+
+#include "nav/drivers/time/timestamps.h"
 
 namespace nav::daemon {
 
@@ -14,7 +18,9 @@ inline std::int64_t clock_us(clockid_t id) {
   return std::int64_t{ts.tv_sec} * 1'000'000 + ts.tv_nsec / 1000;
 }
 inline std::int64_t monotonic_us() { return clock_us(CLOCK_MONOTONIC); }
-inline std::int64_t realtime_us() { return clock_us(CLOCK_REALTIME); }
+inline std::int64_t realtime_us() {
+  return clock_us(CLOCK_REALTIME) + drivers::realtime_offset_us();
+}
 
 /// Sleeps until host monotonic time `until_us`, in 50 ms slices so that `stop` is seen within
 /// 50 ms; returns false if `stop` was set.

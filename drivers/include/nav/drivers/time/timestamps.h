@@ -21,4 +21,12 @@ struct Timestamps {
 /// which take HostTime as an argument so that replay and tests are deterministic).
 HostTime host_time_now();
 
+/// The host realtime seam (docs/faults.md "clock_step"): every CLOCK_REALTIME this process reads
+/// through host_time_now() (and navd's daemon::realtime_us(), and the arrival stamps the camera
+/// back ends take from the kernel's realtime clock) is the kernel's plus this offset, so a HIL
+/// test can step navd's wall clock without stepping the host's, which other processes share.
+/// 0 unless set; CLOCK_MONOTONIC is never offset. Atomic: any thread may set or read it.
+void set_realtime_offset_us(int64_t offset_us);
+int64_t realtime_offset_us();
+
 }  // namespace nav::drivers

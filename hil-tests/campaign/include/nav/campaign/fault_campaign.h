@@ -21,7 +21,9 @@
 // Verdict (pass): navd alive at the end (or restarted, kill_restart); detected within 3 s where
 // a Detector is set; mean NEES during and after <= 6 (the 95 % chi-square bound of one 2-DOF
 // sample: lenient, the samples are correlated); XY sigma grew where uncertainty_must_grow;
-// no delayed state lost. `reason` lists each failed criterion.
+// no delayed state lost; where the scenario asks: the sensor reconnected by itself and was
+// read after the window (camera_vanish), no measurement dropped as late or for a full queue
+// (navd's exit summary: dropped_late, queue_dropped). `reason` lists each failed criterion.
 //
 // Threads: run_campaign() enters the namespaces first, so call it before starting threads.
 
@@ -61,6 +63,9 @@ struct ScenarioResult {
   std::string notes;  ///< what the host fault did / what navd logged about it
   bool pass = false;
   std::string reason;  ///< failed criteria, "; "-separated ("" when pass)
+  /// Failed scenario-specific criteria (must_reconnect, no_late_measurements), "; "-separated;
+  /// judge() adds them to `reason`.
+  std::string scenario_failures;
 };
 
 /// Runs the scenarios (options.only, else all of standard_scenarios(short_version)), one at a

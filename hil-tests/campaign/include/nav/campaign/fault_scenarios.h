@@ -22,15 +22,19 @@ enum class HostFault {
   kRouteRemoved,        ///< the multicast route 224.0.0.0/4 deleted (network namespace)
   kCheckpointDiskFull,  ///< checkpoint.path on a small tmpfs, filled to ENOSPC
   kKillRestart,         ///< SIGKILL at a random moment of the window, restart with checkpoints
+  kClockStep,           ///< navd's CLOCK_REALTIME stepped by clock_step_s at the window's start
+                        ///< (navd --clock-offset-file: the host's clock is shared, not stepped)
 };
 
 /// The health_t / sensor_health_t condition that counts as "health reports the fault".
 enum class Detector {
-  kSilent,        ///< the sensor's last_message_age_s > 1 s or connected == false
-  kDisconnected,  ///< connected == false or reconnects grew
-  kRejected,      ///< the sensor's rejected_updates or decode_errors grew, or nis_mean > 4 x
-                  ///< nis_expected (innovation monitoring)
-  kNone,          ///< nothing in health is expected (host faults navd should ride through)
+  kSilent,         ///< the sensor's last_message_age_s > 1 s or connected == false
+  kDisconnected,   ///< connected == false or reconnects grew
+  kRejected,       ///< the sensor's rejected_updates or decode_errors grew, or nis_mean > 4 x
+                   ///< nis_expected (innovation monitoring)
+  kWallClockJump,  ///< health_t.status says "wall clock jumped" (publisher.h), timed by the
+                   ///< campaign's receipt of the message (its utime is the stepped clock)
+  kNone,           ///< nothing in health is expected (host faults navd should ride through)
 };
 
 const char* to_string(HostFault fault);
@@ -47,6 +51,13 @@ struct FaultScenario {
   std::string sensor;  ///< the sensor whose health is watched ("" for host faults)
   Detector detector = Detector::kNone;
   bool uncertainty_must_grow = false;  ///< XY sigma at the window's end > at its start
+  double clock_step_s = 0.0;           ///< kClockStep: the step (s)
+  /// The watched sensor must come back by itself: its reconnects >= 1 at the end and records
+  /// taken after the window (camera_vanish).
+  bool must_reconnect = false;
+  /// No measurement may be dropped as late or for a full queue in the whole run (navd's exit
+  /// summary: dropped_late, queue_dropped).
+  bool no_late_measurements = false;
 };
 
 /// The full campaign (short = false) or the CI's short one: 3 scenarios on a 43-s dive.

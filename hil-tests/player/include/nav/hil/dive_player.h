@@ -11,7 +11,8 @@
 //     camera_id 127.0.0.1, Mono12Packed, hardware trigger on Line1 with the player as the
 //     trigger line): each NAV_IMAGE of the log becomes one frame, the dive's rendered PNG
 //     (`navtool simulate --render-images`) or else a test pattern, sent when the vehicle's
-//     frame reached the host (camera_playback.h); counted in the report;
+//     frame reached the host (camera_playback.h); counted in the report; a kCameraVanish
+//     fault on it destroys and restarts the fake (player_faults.h);
 //   * oracle registrations (NAV_REGISTRATION): with `registration_lcm_url`, published on LCM
 //     (`registration_channel`) at their log times (the log's realtime utime mapped to the host
 //     monotonic schedule through the raw messages' realtime - monotonic offset), each with
@@ -96,13 +97,16 @@ struct PlayedSensor {
 
 /// The camera part of the playback (camera_playback.h), when a camera is played.
 struct CameraPlayReport {
-  std::int64_t images = 0;         ///< NAV_IMAGE events played (triggered)
+  std::int64_t images = 0;         ///< NAV_IMAGE events played (triggered, or `vanished`)
   std::int64_t with_frame = 0;     ///< of those, with the dive's PNG loaded
   std::int64_t frame_missing = 0;  ///< file_path set but the PNG could not be read
   std::int64_t sent = 0;           ///< frames the fake sent for them
   std::int64_t not_taken = 0;      ///< triggers the fake had not acted on by the next one
   double max_send_late_s = 0.0;    ///< worst frame send time after its due time
   double mean_send_late_s = 0.0;
+  std::int64_t vanished = 0;   ///< images due while a kCameraVanish fault had the camera gone
+  std::int64_t vanishes = 0;   ///< times the fake was destroyed (kCameraVanish)
+  std::string reappear_error;  ///< why the fake could not be started again ("" = it was)
 };
 
 struct PlayReport {

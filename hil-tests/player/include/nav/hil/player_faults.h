@@ -16,7 +16,11 @@
 //                  value);
 //   kUnplug        the sensor's pty is closed at from_s (navd sees the device vanish: EIO /
 //                  POLLHUP, the symlink removed) and a new pty is opened under the same
-//                  symlink at to_s; messages in between are not written.
+//                  symlink at to_s; messages in between are not written;
+//   kCameraVanish  the played GigE camera (`sensor` names the camera_gige sensor) is destroyed
+//                  at from_s (Aravis' fake stops answering GVCP and streaming: navd's heartbeat
+//                  fails, control lost) and a new fake with the same serial is started at
+//                  to_s; the images due in between are not sent (camera_playback.h).
 // The byte transforms are pure functions (tested against the drivers' decoders).
 //
 // Threads: none of their own; the player calls them on its playing thread.
@@ -29,9 +33,9 @@
 
 namespace nav::hil {
 
-enum class FaultKind { kDrop, kGarbage, kHeadingStuck, kDepthSpike, kUnplug };
+enum class FaultKind { kDrop, kGarbage, kHeadingStuck, kDepthSpike, kUnplug, kCameraVanish };
 
-/// "drop", "garbage", "heading_stuck", "depth_spike", "unplug".
+/// "drop", "garbage", "heading_stuck", "depth_spike", "unplug", "camera_vanish".
 const char* to_string(FaultKind kind);
 
 struct PlayerFault {
@@ -63,9 +67,10 @@ std::optional<std::vector<std::uint8_t>> paro_with_depth_offset(std::span<const 
                                                                 double depth_offset_m);
 
 /// What the player does with one message of a sensor under `fault` (not kUnplug, which the
-/// player handles with the pty itself). `count` numbers the fault's messages from 0 (depth
-/// spikes alternate on it; garbage seeds on it). Returns the bytes to write: empty = write
-/// nothing; `bytes` unchanged when the message is not of the kind the fault acts on.
+/// player handles with the pty itself, nor kCameraVanish, which the camera playback does). `count`
+/// numbers the fault's messages from 0 (depth spikes alternate on it; garbage seeds on it). Returns
+/// the bytes to write: empty = write nothing; `bytes` unchanged when the message is not of the kind
+/// the fault acts on.
 std::vector<std::uint8_t> apply_fault(const PlayerFault& fault, std::span<const std::uint8_t> bytes,
                                       std::int64_t count);
 
