@@ -345,12 +345,12 @@ void run_register_eval(const EvalArgs& args) {
     for (std::size_t k = 0; k < pairs.size(); ++k) {
       const PairEval& e = evals[k];
       std::fprintf(stderr,
-                   "pair %lld-%lld: %s inliers %d/%d rotation %.3f deg baseline %.2f deg NEES %.1f "
-                   "rms %.2f px truths %d missed %d/%d/%d %s\n",
+                   "pair %lld-%lld: %s inliers %d/%d true %d rotation %.3f deg baseline %.2f deg NEES %.1f "
+                   "rms %.2f px sigma %.2f px area %.3f truths %d missed %d/%d/%d %s\n",
                    static_cast<long long>(dive.frames[static_cast<std::size_t>(pairs[k].i)].id),
                    static_cast<long long>(dive.frames[static_cast<std::size_t>(pairs[k].j)].id),
-                   e.result.success ? "ok" : "FAILED", e.result.inliers, e.result.putative_matches,
-                   e.rotation_error_deg, e.baseline_error_deg, e.nees, e.result.reprojection_rms_px,
+                   e.result.success ? "ok" : "FAILED", e.result.inliers, e.result.putative_matches, e.inliers_true,
+                   e.rotation_error_deg, e.baseline_error_deg, e.nees, e.result.reprojection_rms_px, e.residual_sigma_px, e.inlier_area_fraction,
                    e.true_correspondences, e.missed[0], e.missed[1], e.missed[2], e.result.reason.c_str());
     }
   }

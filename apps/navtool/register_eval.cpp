@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -37,27 +38,35 @@ double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
 }
 
+/// Reprojection error in image j (px) of match (u_i, u_j) under the true pose: the point
+/// triangulated from both rays, seen from camera j; infinite when it is not in front of both.
+double true_reprojection_error_px(const Eigen::Vector2d& u_i, const Eigen::Vector2d& u_j,
+                                  const vision::CameraIntrinsics& camera, const Vec6& x_i_j) {
+  const Eigen::Matrix3d R_i_j = core::rotation_from_euler(x_i_j.tail<3>());
+  const Eigen::Vector3d t_i_j = x_i_j.head<3>();
+  const Eigen::Vector2d x_i = vision::normalised_from_pixel(camera, u_i);
+  const Eigen::Vector2d x_j = vision::normalised_from_pixel(camera, u_j);
+  double d_i = 0.0, d_j = 0.0;
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  if (!vision::triangulate_depths(R_i_j, t_i_j, x_i, x_j, &d_i, &d_j)) return kInf;
+  if (!(d_i > 0.0 && d_j > 0.0)) return kInf;
+  // The point at depth d_i on ray i, seen from camera j.
+  const Eigen::Vector3d X_j = R_i_j.transpose() * (d_i * Eigen::Vector3d(x_i.x(), x_i.y(), 1.0) - t_i_j);
+  if (X_j.z() <= 0.0) return kInf;
+  return (vision::pixel_from_normalised(camera, X_j.head<2>() / X_j.z()) - u_j).norm();
+}
+
 /// Unconstrained matches that the true pose confirms (register_eval.h).
 std::vector<vision::Match> true_correspondences(const vision::ImageFeatures& fi,
                                                 const vision::ImageFeatures& fj,
                                                 const vision::CameraIntrinsics& camera,
                                                 const Vec6& x_i_j, double max_error_px) {
-  const Eigen::Matrix3d R_i_j = core::rotation_from_euler(x_i_j.tail<3>());
-  const Eigen::Vector3d t_i_j = x_i_j.head<3>();
   std::vector<vision::Match> out;
   for (const vision::Match& m : vision::match_unconstrained(fi, fj).matches) {
-    const Eigen::Vector2d& u_i = fi.points_px[static_cast<std::size_t>(m.index_i)];
-    const Eigen::Vector2d& u_j = fj.points_px[static_cast<std::size_t>(m.index_j)];
-    const Eigen::Vector2d x_i = vision::normalised_from_pixel(camera, u_i);
-    const Eigen::Vector2d x_j = vision::normalised_from_pixel(camera, u_j);
-    double d_i = 0.0, d_j = 0.0;
-    if (!vision::triangulate_depths(R_i_j, t_i_j, x_i, x_j, &d_i, &d_j)) continue;
-    if (!(d_i > 0.0 && d_j > 0.0)) continue;
-    // The point at depth d_i on ray i, seen from camera j.
-    const Eigen::Vector3d X_j = R_i_j.transpose() * (d_i * Eigen::Vector3d(x_i.x(), x_i.y(), 1.0) - t_i_j);
-    if (X_j.z() <= 0.0) continue;
-    const Eigen::Vector2d u_pred = vision::pixel_from_normalised(camera, X_j.head<2>() / X_j.z());
-    if ((u_pred - u_j).norm() <= max_error_px) out.push_back(m);
+    if (true_reprojection_error_px(fi.points_px[static_cast<std::size_t>(m.index_i)],
+                                   fj.points_px[static_cast<std::size_t>(m.index_j)], camera,
+                                   x_i_j) <= max_error_px)
+      out.push_back(m);
   }
   return out;
 }
@@ -85,8 +94,19 @@ PairEval evaluate_pair(const vision::Registration& registration, const vision::I
   PairEval e;
   const vision::RelativePosePrior prior = make_prior(truth, o);
   const auto start = std::chrono::steady_clock::now();
-  e.result = registration.register_pair(fi, fj, &prior, diagnostics);
+  vision::RegistrationDiagnostics local;
+  vision::RegistrationDiagnostics& d = diagnostics != nullptr ? *diagnostics : local;
+  e.result = registration.register_pair(fi, fj, &prior, &d);
   e.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  e.residual_sigma_px = d.refinement.residual_sigma_px;
+  e.inlier_area_fraction = d.refinement.inlier_area_fraction;
+  for (const int k : d.refinement.used_matches) {
+    const vision::Match& m = d.matches.matches[static_cast<std::size_t>(k)];
+    if (true_reprojection_error_px(fi.points_px[static_cast<std::size_t>(m.index_i)],
+                                   fj.points_px[static_cast<std::size_t>(m.index_j)],
+                                   registration.camera(), truth.x_i_j) <= o.max_true_error_px)
+      ++e.inliers_true;
+  }
   const Vec5 z_true = vision::z_from_relative_pose(truth.x_i_j);
   if (e.result.success) {
     const Vec5& z = e.result.z;

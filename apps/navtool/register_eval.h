@@ -47,6 +47,11 @@ struct PairEval {
   int true_correspondences = 0;
   int missed[3] = {0, 0, 0};  ///< outside the band with (a) P, (b) inflated, (c) over-confident
   double ms = 0.0;            ///< register_pair wall time
+  /// Refinement inliers that the true pose confirms (as a true correspondence): few of
+  /// result.inliers means wrong matches, all of them with a wrong z means the estimation.
+  int inliers_true = 0;
+  double residual_sigma_px = 0.0;  ///< the refinement's a-posteriori pixel noise
+  double inlier_area_fraction = 0.0;  ///< the refinement's inlier spread in image i
 };
 
 /// The prior of pair `truth` (mean drawn from P with a generator seeded by seed, i, j).

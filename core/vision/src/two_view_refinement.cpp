@@ -33,6 +33,21 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+/// 12 sqrt(det(second moment of the points)) / frame area (two_view_refinement.h).
+double area_fraction(const std::vector<Eigen::Vector2d>& u_px, const CameraIntrinsics& cam) {
+  // A camera without an expected size: the frame whose centre is the principal point.
+  const double width = cam.width_px > 0 ? cam.width_px : 2.0 * cam.cx_px;
+  const double height = cam.height_px > 0 ? cam.height_px : 2.0 * cam.cy_px;
+  if (u_px.size() < 3 || !(width > 0.0) || !(height > 0.0)) return 0.0;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& u : u_px) mean += u;
+  mean /= static_cast<double>(u_px.size());
+  Eigen::Matrix2d second = Eigen::Matrix2d::Zero();
+  for (const auto& u : u_px) second += (u - mean) * (u - mean).transpose();
+  second /= static_cast<double>(u_px.size());
+  return 12.0 * std::sqrt(std::max(0.0, second.determinant())) / (width * height);
+}
+
 }  // namespace
 
 Eigen::VectorXd two_view_residuals(const Vec5& z, const std::vector<Eigen::Vector3d>& points_i,
@@ -168,6 +183,7 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
         opt.pixel_sigma_px *
         std::sqrt(rss_whitened / static_cast<double>(std::max<std::size_t>(n - 5, 1)));
     out.median_parallax_px = median(parallax);
+    out.inlier_area_fraction = area_fraction(ui, cam);
   };
   constexpr int kRounds = 3;
   NormalEquations ne;
@@ -261,6 +277,11 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
   J.topLeftCorner<2, 2>() = G.topLeftCorner<2, 3>() * tangent_basis(x.t);
   J.bottomRightCorner<3, 3>().setIdentity();
   out.covariance = J * covariance_delta * J.transpose();
+  if (opt.scale_by_residual_variance) {
+    const double ratio = out.residual_sigma_px / opt.pixel_sigma_px;
+    out.covariance_scale = std::max(1.0, ratio * ratio);
+    out.covariance *= out.covariance_scale;
+  }
   out.converged = true;
   return out;
 }

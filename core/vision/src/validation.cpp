@@ -102,6 +102,13 @@ void validate_registration(const TwoViewRefinement& refinement, const RelativePo
     set_failure(result, RegistrationFailure::kTooFewInliers, why.str());
     return;
   }
+  if (!(refinement.inlier_area_fraction >= options.min_inlier_area_fraction)) {
+    why << result.inliers << " inliers spread over " << refinement.inlier_area_fraction
+        << " of the frame (second-moment area), less than the " << options.min_inlier_area_fraction
+        << " required";
+    set_failure(result, RegistrationFailure::kTooFewInliers, why.str());
+    return;
+  }
   if (!(refinement.reprojection_rms_px <= options.max_reprojection_rms_px)) {
     why << "reprojection RMS " << refinement.reprojection_rms_px << " px above the limit "
         << options.max_reprojection_rms_px << " px";

@@ -168,7 +168,11 @@ TEST(TwoViewRefinement, CovarianceEqualsDenseInverseOfFullInformation) {
   const Eigen::MatrixXd H = J.transpose() * J;
   const Eigen::MatrixXd P = H.inverse();
   const Mat5 P_zz = P.topLeftCorner<5, 5>();
-  const double rel = (P_zz - r.covariance).norm() / P_zz.norm();
+  // The a-posteriori factor, from the residuals at the solution: max(1, RSS / (n - 5)) in
+  // whitened units (4n residuals, 3n + 5 unknowns).
+  const double factor = std::max(1.0, residuals(theta).squaredNorm() / (n - 5));
+  EXPECT_NEAR(r.covariance_scale, factor, 1e-9 * factor);
+  const double rel = (factor * P_zz - r.covariance).norm() / (factor * P_zz.norm());
   std::cout << "covariance vs dense inverse: relative difference " << rel << "\n";
   EXPECT_LT(rel, 1e-4);
   // And the solution is a stationary point of the cost: the Newton decrement g^T H^-1 g

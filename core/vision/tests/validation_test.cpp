@@ -114,6 +114,34 @@ TEST(Validation, EachCheckFailsWithItsCode) {
   EXPECT_EQ(result.failure, RegistrationFailure::kTooFewInliers);
   EXPECT_TRUE(contains(result.reason, "fewer than the 500")) << result.reason;
 
+  // Matches uniform over the frame spread over ~1 of it; a cluster on one patch fails.
+  EXPECT_GT(good.inlier_area_fraction, 0.6);
+  strict = ValidationOptions{};
+  strict.min_inlier_area_fraction = 1.5 * good.inlier_area_fraction;
+  validate_registration(good, &prior, strict, result);
+  EXPECT_EQ(result.failure, RegistrationFailure::kTooFewInliers);
+  EXPECT_TRUE(contains(result.reason, "of the frame (second-moment area)")) << result.reason;
+  std::mt19937 rng_cluster(5);
+  const test::TwoViewScene wide = test::make_scene(rng_cluster, x, 2000, 3.5, 0.3, kSigmaPx);
+  std::vector<Eigen::Vector2d> u_i, u_j;  // the matches of one 200 x 200 px patch of image i
+  for (std::size_t k = 0; k < wide.size(); ++k) {
+    const Eigen::Vector2d d = wide.u_i[k] - Eigen::Vector2d(wide.camera.cx_px, wide.camera.cy_px);
+    if (d.cwiseAbs().maxCoeff() < 100.0) {
+      u_i.push_back(wide.u_i[k]);
+      u_j.push_back(wide.u_j[k]);
+    }
+  }
+  TwoViewRefinementOptions o;
+  o.pixel_sigma_px = kSigmaPx;
+  const TwoViewRefinement cluster = refine_two_view(
+      u_i, u_j, wide.camera, core::pose_rotation(x), core::pose_translation(x), o);
+  ASSERT_TRUE(cluster.converged) << cluster.reason;
+  // Uniform over a 200 x 200 px square: 40,000 px^2 of the frame.
+  const double square = 40000.0 / (wide.camera.width_px * wide.camera.height_px);
+  EXPECT_NEAR(cluster.inlier_area_fraction, square, 0.35 * square);
+  validate_registration(cluster, &prior, ValidationOptions{}, result);
+  EXPECT_EQ(result.failure, RegistrationFailure::kTooFewInliers) << cluster.inlier_area_fraction;
+
   strict = ValidationOptions{};
   strict.max_reprojection_rms_px = 0.1;
   validate_registration(good, &prior, strict, result);

@@ -83,6 +83,90 @@ cv::Mat Renderer::backscatter(const core::Vec3& p_cam, const core::Mat3& R_world
   return full(cv::Rect(0, 0, w, h)).clone();
 }
 
+Renderer::TopMap Renderer::top_map(const core::Vec3& p_cam) const {
+  // 1 m cells over a 30 m square around the camera (its rays leave it only > 15 m / tan(half
+  // diagonal field) ~ 18 m below the camera, far below any relief), each holding the shallowest
+  // grid sample of itself and its 8 neighbours: anywhere within 1 m of a point of the cell the
+  // seafloor is at least that deep. Outside the square: the shallowest of the whole square.
+  TopMap m;
+  m.x0_m = std::floor(p_cam.x()) - 15.0;
+  m.y0_m = std::floor(p_cam.y()) - 15.0;
+  const double step = seafloor_->options().resolution_m;
+  const int per_cell = std::max(1, static_cast<int>(std::lround(1.0 / step)));
+  std::vector<double> own(static_cast<std::size_t>(TopMap::kCells * TopMap::kCells), 1e12);
+  for (int cy = 0; cy < TopMap::kCells; ++cy)
+    for (int cx = 0; cx < TopMap::kCells; ++cx) {
+      double& top = own[static_cast<std::size_t>(cy * TopMap::kCells + cx)];
+      for (int iy = 0; iy <= per_cell; ++iy)
+        for (int ix = 0; ix <= per_cell; ++ix)
+          top = std::min(top, seafloor_->depth_m(m.x0_m + cx + ix * step, m.y0_m + cy + iy * step));
+    }
+  m.depth_m.assign(own.size(), 1e12);
+  m.overall_m = 1e12;
+  for (int cy = 0; cy < TopMap::kCells; ++cy)
+    for (int cx = 0; cx < TopMap::kCells; ++cx) {
+      double top = 1e12;
+      for (int ny = std::max(0, cy - 1); ny <= std::min(TopMap::kCells - 1, cy + 1); ++ny)
+        for (int nx = std::max(0, cx - 1); nx <= std::min(TopMap::kCells - 1, cx + 1); ++nx)
+          top = std::min(top, own[static_cast<std::size_t>(ny * TopMap::kCells + nx)]);
+      m.depth_m[static_cast<std::size_t>(cy * TopMap::kCells + cx)] = top;
+      m.overall_m = std::min(m.overall_m, top);
+    }
+  return m;
+}
+
+double Renderer::TopMap::at(double x_m, double y_m) const {
+  const int cx = static_cast<int>(std::floor(x_m - x0_m)), cy = static_cast<int>(std::floor(y_m - y0_m));
+  if (cx < 0 || cy < 0 || cx >= kCells || cy >= kCells) return overall_m;
+  return depth_m[static_cast<std::size_t>(cy * kCells + cx)];
+}
+
+double Renderer::first_hit(const core::Vec3& p, const core::Vec3& d, const TopMap& top) const {
+  // First crossing of the ray p + t d (d.z > 0) below the height field. Each step is the larger
+  // of two safe ones: down to the ray point's cell bound (TopMap) or 1 m sideways, whichever
+  // comes first (inside the bound's 1 m margin); at most half a grid cell sideways and half the
+  // height above the floor below (at least 5 cm) down. It stops at the first point below the
+  // surface and bisects the last step. The hull's and deckhouses' near-vertical walls (slopes up to
+  // ~25 on the 0.1 m grid) are hit where the ray meets them and nothing behind them shows
+  // through (a fixed-point iteration on the depth diverges there: it alternated between deck
+  // and mud and painted one surface's texture at the other's depth, an image of no 3-D scene).
+  const double half_cell = 0.5 * seafloor_->options().resolution_m;
+  const double sideways = std::hypot(d.x(), d.y());
+  const auto height_above = [&](double t) {
+    const core::Vec3 q = p + t * d;
+    return seafloor_->depth_m(q.x(), q.y()) - q.z();
+  };
+  const auto bound_step = [&](double t) {  // safe step above the cell bound, else 0
+    const core::Vec3 q = p + t * d;
+    const double clear_m = top.at(q.x(), q.y()) - q.z();
+    if (clear_m <= 0.05) return 0.0;
+    return sideways > 0.0 ? std::min(clear_m / d.z(), 1.0 / sideways) : clear_m / d.z();
+  };
+  double t0 = 0.05, g0 = height_above(t0);
+  if (g0 <= 0.0) return t0;
+  for (int k = 0; k < 100000; ++k) {
+    double dt = std::max(0.05, 0.5 * g0) / d.z();
+    if (sideways > 0.0) dt = std::min(dt, half_cell / sideways);
+    dt = std::max(dt, bound_step(t0));
+    const double t1 = t0 + dt, g1 = height_above(t1);
+    if (g1 <= 0.0) {
+      double lo = t0, hi = t1;  // above at lo, below at hi
+      for (int b = 0; b < 14; ++b) {
+        const double mid = 0.5 * (lo + hi);
+        (height_above(mid) > 0.0 ? lo : hi) = mid;
+      }
+      return 0.5 * (lo + hi);
+    }
+    t0 = t1;
+    g0 = g1;
+  }
+  return t0;
+}
+
+core::Vec3 Renderer::surface_point(const core::Vec3& p_world, const core::Vec3& d_world) const {
+  return p_world + first_hit(p_world, d_world, top_map(p_world)) * d_world;
+}
+
 cv::Mat Renderer::render(const core::Vec12& x, std::uint64_t frame_seed, double* gain_db) const {
   const core::Vec6 x_wc = core::head_to_tail(x.head<6>(), camera_.x_body_camera);
   const core::Mat3 R = core::rotation_from_euler(x_wc.tail<3>());
@@ -97,6 +181,7 @@ cv::Mat Renderer::render(const core::Vec12& x, std::uint64_t frame_seed, double*
     return 0.35 / (range_m * range_m) * std::exp(-options_.attenuation_per_m * 2.0 * range_m);
   };
   const double nadir_m = std::max(0.3, floor0 - p_cam.z());
+  const TopMap top = top_map(p_cam);
   // Radiance per unit exposure: the strobe-lit floor plus the backscatter veil.
   cv::Mat radiance = backscatter(p_cam, R, p_strobe, nadir_m, 1.0);
   for (int v = 0; v < h; ++v) {
@@ -106,12 +191,7 @@ cv::Mat Renderer::render(const core::Vec12& x, std::uint64_t frame_seed, double*
                                (v + 0.5 - camera_.cy_px) / camera_.fy_px, 1.0);
       const core::Vec3 d = R * ray_cam;
       if (d.z() <= 0.05) continue;
-      // The ray meets the surface z = depth(x, y): fixed point from the plane below the camera.
-      double t = (floor0 - p_cam.z()) / d.z();
-      for (int k = 0; k < 4; ++k) {
-        const core::Vec3 q = p_cam + t * d;
-        t = std::max(0.05, (seafloor_->depth_m(q.x(), q.y()) - p_cam.z()) / d.z());
-      }
+      const double t = first_hit(p_cam, d, top);
       const core::Vec3 q = p_cam + t * d;
       const double dzdx =
           (seafloor_->depth_m(q.x() + e, q.y()) - seafloor_->depth_m(q.x() - e, q.y())) / (2 * e);
@@ -123,7 +203,8 @@ cv::Mat Renderer::render(const core::Vec12& x, std::uint64_t frame_seed, double*
       const double lambert = std::max(0.0, n.dot(to_strobe) / r_strobe);
       const double cos_axis = 1.0 / ray_cam.norm();
       const double cos2 = cos_axis * cos_axis;
-      row[u] += static_cast<float>(albedo(q.x(), q.y(), floor0 - q.z()) * lambert /
+      row[u] += static_cast<float>(albedo(q.x(), q.y(), seafloor_->relief_height_m(q.x(), q.y())) *
+                                   lambert /
                                    (r_strobe * r_strobe) *
                                    std::exp(-options_.attenuation_per_m * (r_strobe + r_cam)) *
                                    cos2 * cos2);

@@ -28,7 +28,11 @@
 // of the information H = J^T J of the whitened residuals of the kept matches (all inside the
 // Huber kink, so unit weights) in the solver's pose parameters p, mapped to z by dz/dp: the
 // 3-D points are marginalised, equal to the top-left 5x5 block of the dense inverse of the
-// information in (z, points).
+// information in (z, points). That covariance assumes the feature noise is pixel_sigma_px; the
+// residuals measure it: with s_hat^2 = RSS / (n - 5) (4n residuals, 3n + 5 unknowns) the
+// covariance is multiplied by max(1, s_hat^2 / s^2) (Hartley & Zisserman, section 5.1.3, the
+// a-posteriori variance factor; floored at 1 so a lucky fit of few points does not shrink it
+// below the configured localisation noise), reported in covariance_scale.
 //
 // Failures (converged == false, `reason` says why and with which numbers): fewer than
 // min_points usable matches; too many matches triangulating behind either camera; median
@@ -59,6 +63,8 @@ struct TwoViewRefinementOptions {
   /// match is noise, Rayleigh with scale sqrt(2) sigma and median 1.67 sigma.
   double min_parallax_sigma = 3.0;
   double min_rcond = 1e-12;  ///< Smallest reciprocal condition of S.
+  /// Multiply the covariance by max(1, residual_sigma_px^2 / pixel_sigma_px^2).
+  bool scale_by_residual_variance = true;
 };
 
 /// Result of refine_two_view. Points, depths and pixel residuals are listed for the matches
@@ -83,6 +89,11 @@ struct TwoViewRefinement {
   /// A-posteriori pixel noise sqrt(RSS / (n - 5)) (reported; the covariance uses
   /// pixel_sigma_px). Much smaller or larger than pixel_sigma_px: the noise model is off.
   double residual_sigma_px = 0.0;
+  double covariance_scale = 1.0;  ///< the a-posteriori factor applied to `covariance`
+  /// Spread of the used matches in image i: 12 sqrt(det(second moment of u_i)) / (width x
+  /// height), 1 for points spread uniformly over the frame (the area of a uniform rectangle
+  /// with the same second moments, as a fraction of the frame).
+  double inlier_area_fraction = 0.0;
   int iterations = 0;
   int behind_camera = 0;      ///< Matches dropped behind a camera (initial DLT or after a solve).
   int rejected_outliers = 0;  ///< Matches dropped beyond the Huber kink.

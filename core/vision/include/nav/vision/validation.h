@@ -5,6 +5,10 @@
 //   1. the refinement converged; else its own code and reason (TwoViewRefinement::failure:
 //      kTooFewInliers, kEssentialFailed or kRefinementFailed);
 //   2. at least min_inliers points were used                  -> kTooFewInliers;
+//      and they spread over at least min_inlier_area_fraction of the frame (TwoViewRefinement::
+//      inlier_area_fraction): a small cluster of matches pins the pose on one patch of the
+//      scene, where a few coherent mismatches (repeated texture, a moving shadow) can fit a
+//      wrong pose with sub-pixel residuals                    -> kTooFewInliers;
 //   3. reprojection RMS <= max_reprojection_rms_px            -> kReprojectionError;
 //   4. every point in front of both cameras                   -> kRefinementFailed;
 //   5. with a prior: its baseline has a defined azimuth (else there is neither a depth scale
@@ -28,6 +32,7 @@ namespace nav::vision {
 
 struct ValidationOptions {
   int min_inliers = 12;
+  double min_inlier_area_fraction = 0.03;
   double max_reprojection_rms_px = 1.5;
   double depth_k_sigma = 3.0;
   double max_fraction_depth_outliers = 0.2;

@@ -1,8 +1,8 @@
 #pragma once
 // Renders the simulated camera's 12-bit grey frames from the seafloor height field
 // (`navtool simulate --render-images`): per pixel, the ray of the pinhole camera (config
-// intrinsics, no distortion, config mount) meets the height field (fixed-point iteration on
-// the bilinear surface); the seafloor's albedo is a seeded multi-scale value-noise texture
+// intrinsics, no distortion, config mount) meets the height field (first crossing of the
+// bilinear surface by ray marching and bisection, walls included); the seafloor's albedo is a seeded multi-scale value-noise texture
 // (sediment, brighter rocks and debris tops); a strobe beside the camera lights it with
 // Lambert shading, inverse-square falloff and exponential attenuation in sea water along
 // strobe -> seafloor -> camera; backscatter of the strobe light by the water along each ray
@@ -35,13 +35,27 @@ class Renderer {
   /// The frame (CV_16UC1, 2cy x 2cx, values 0..4095) seen from the true state `x`; the auto
   /// exposure's gain relative to a floor 1 m below the camera goes to *gain_db.
   cv::Mat render(const core::Vec12& x, std::uint64_t frame_seed, double* gain_db = nullptr) const;
-  /// Albedo of the seafloor at world x, y standing `relief_m` above the floor below the camera.
+  /// Albedo of the seafloor at world x, y standing `relief_m` above the flat seafloor
+  /// (Seafloor::relief_height_m): a property of the point, the same from every camera.
   double albedo(double x_m, double y_m, double relief_m) const;
+  /// The first point of the ray p_world + t d_world (t > 0, d_world.z > 0: looking down) on the
+  /// height field, as render() finds each pixel's (world NED, m).
+  core::Vec3 surface_point(const core::Vec3& p_world, const core::Vec3& d_world) const;
   /// 8-bit thumbnail (width thumbnail_width_px, aspect kept) of a 12-bit frame.
   cv::Mat thumbnail(const cv::Mat& frame) const;
 
  private:
   double value_noise(double x, double y, std::uint64_t octave_seed) const;
+  /// Lower bound of the seafloor depth (its shallowest) per 1 m cell around a camera.
+  struct TopMap {
+    static constexpr int kCells = 30;
+    double x0_m = 0.0, y0_m = 0.0, overall_m = 0.0;
+    std::vector<double> depth_m;  ///< row-major kCells x kCells
+    double at(double x_m, double y_m) const;
+  };
+  TopMap top_map(const core::Vec3& p_cam) const;
+  /// Ray parameter t of the first point of p + t d (d.z > 0) at or below the height field.
+  double first_hit(const core::Vec3& p, const core::Vec3& d, const TopMap& top) const;
   /// Backscattered strobe light per pixel (CV_32F counts) for a floor range_m away.
   cv::Mat backscatter(const core::Vec3& p_cam, const core::Mat3& R_world_cam,
                       const core::Vec3& p_strobe, double range_m, double exposure) const;
