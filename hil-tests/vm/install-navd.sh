@@ -26,6 +26,18 @@ lib=$root/usr/lib/navd-vm
 mkdir -p "$lib/scenarios"
 "$build/bin/navtool" simulate --config "$src/config/sim.yaml" --out "$lib/dive" \
   --images "${NAV_VM_DIVE_IMAGES:-40}" --seed 7 > /dev/null
+# The watchdog scenario's dive, played with its camera: frames of 160 x 128 px (the intrinsics
+# scaled by 1/8 alike: the same field of view), so that the player's fake GigE camera fills a
+# frame in the emulated CPU's time; at 1280 x 1024 its GVCP answers wait so long that navd's
+# Aravis declares the camera lost (heartbeat) and no image arrives.
+sed -e 's/^\(      f[xy]:\) 1000.0/\1 125.0/' -e 's/^\(      cx:\) 640.0/\1 80.0/' \
+    -e 's/^\(      cy:\) 512.0/\1 64.0/' "$src/config/sim.yaml" > "$lib/camera-sim.yaml"
+[ "$(grep -cE '^      (fx: 125|fy: 125|cx: 80|cy: 64)\.0' "$lib/camera-sim.yaml")" = 4 ] || {
+  echo "install-navd.sh: config/sim.yaml's camera intrinsics are not the 1000/640/512 expected" >&2
+  exit 1; }
+"$build/bin/navtool" simulate --config "$lib/camera-sim.yaml" --out "$lib/camera-dive" \
+  --images 20 --seed 7 > /dev/null
+rm "$lib/camera-sim.yaml"
 # The navd config hil-play writes for it (without a reader: --no-wait at high speed), with
 # the VM's paths.
 gen=$(mktemp -d)

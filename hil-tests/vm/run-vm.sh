@@ -2,9 +2,13 @@
 # Builds the navd test VM image, boots it under QEMU and runs scenarios inside it
 # (hil-tests/vm/README.md). One command:
 #   hil-tests/vm/run-vm.sh [--build DIR] [--cache DIR] [--scenarios a,b,c] [--timeout-s S]
+#                          [--break watchdog|hardening]
 # --build: the Release build whose bin/navd and bin/navtool are installed (default build);
 # --cache: NAV_VM_CACHE or ~/.cache/navd-vm (base image, kept between runs and checkouts);
 # --scenarios: default ready,stop,watchdog,hardening,config_error (hil-tests/vm/guest/scenarios).
+# --break: installs a deliberately broken copy of systemd/navd.service (the failure
+# demonstrations of the README): watchdog = without WatchdogSec=, hardening = without
+# ProtectSystem=strict; the scenario of that name must then FAIL (exit 1).
 # Prints the times (image, boot, each scenario) and one verdict per scenario; exit 0 when all
 # pass, 1 when one fails or the VM does not finish, 77 (skip) when this machine cannot run the
 # VM (not root, or no qemu-system-x86_64 / debootstrap / mkfs.ext4), with the reason.
@@ -14,12 +18,14 @@ build=$src/build
 cache=""
 scenarios=ready,stop,watchdog,hardening,config_error
 timeout_s=900
+break_feature=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --build) build=$2; shift 2 ;;
     --cache) cache=$2; shift 2 ;;
     --scenarios) scenarios=$2; shift 2 ;;
     --timeout-s) timeout_s=$2; shift 2 ;;
+    --break) break_feature=$2; shift 2 ;;
     *) echo "run-vm.sh: unknown argument '$1' (see the header of $0)" >&2; exit 2 ;;
   esac
 done
@@ -42,6 +48,18 @@ echo "run-vm.sh: base image $base ($(secs "$t_start") s)"
 
 work=$cache/run
 rm -rf "$work"; mkdir -p "$work"
+if [ -n "$break_feature" ]; then
+  case "$break_feature" in
+    watchdog) removed='^WatchdogSec=' ;;
+    hardening) removed='^ProtectSystem=strict$' ;;
+    *) echo "run-vm.sh: --break '$break_feature': not watchdog or hardening" >&2; exit 2 ;;
+  esac
+  grep -q "$removed" "$src/systemd/navd.service" ||
+    { echo "run-vm.sh: --break: systemd/navd.service has no line $removed" >&2; exit 1; }
+  export NAV_VM_UNIT=$work/navd-broken.service
+  grep -v "$removed" "$src/systemd/navd.service" > "$NAV_VM_UNIT"
+  echo "run-vm.sh: --break $break_feature: the unit without $removed (the $break_feature scenario must FAIL)"
+fi
 root=$work/root
 mkdir "$root"
 tar -C "$root" -xf "$base/root.tar"

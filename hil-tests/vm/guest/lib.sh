@@ -30,11 +30,14 @@ navd_pid() { navd_prop MainPID; }
 
 # The HIL player as the navd user (so the ptys it opens belong to navd) in a transient unit;
 # its playback report (JSON) goes to $HIL_DIR/play.json when it ends. Plays $DIVE (default the
-# dive above). Extra args: hil-play's.
+# dive above). Extra args: hil-play's. With WITH_CAMERA=1 it also serves the dive's camera
+# (Aravis' fake GigE camera on lo, triggered at the image times); otherwise --no-camera.
 start_player() {
+  local camera=--no-camera
+  [ -n "${WITH_CAMERA:-}" ] && camera=""
   mkdir -p "$HIL_DIR"; chown navd:navd "$HIL_DIR"; rm -f "$HIL_DIR/play.json"
   systemd-run --quiet --unit=navd-hil-player -p User=navd -p Group=navd \
-    /bin/sh -c "/usr/bin/navtool hil-play ${DIVE:-$NAVD_VM_DIR/dive} --no-camera \
+    /bin/sh -c "/usr/bin/navtool hil-play ${DIVE:-$NAVD_VM_DIR/dive} $camera \
       --serial-dir $HIL_DIR --config-out $HIL_DIR/navd-hil.yaml --json $* \
       > $HIL_DIR/play.json.part && mv $HIL_DIR/play.json.part $HIL_DIR/play.json"
   wait_for 30 test -e "$HIL_DIR/navd-hil.yaml" || fail "the HIL player made no pty in 30 s: \

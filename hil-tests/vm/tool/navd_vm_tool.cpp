@@ -18,20 +18,49 @@
 //     The last NAVD_HEALTH message (navlcm::health_t) of an LCM log (lcm-logger), one line per
 //     sensor: "<name> records=R bytes=B measurements=M updates=U rejected=X decode_errors=E".
 //     Exit 1 when the log has no NAVD_HEALTH message.
+//
+//   navd_vm_tool solutions LCM_LOG
+//     Every NAVD_SOLUTION message (navlcm::nav_solution_t) of an LCM log, one line each:
+//     "<utime_us> <time_of_validity_us> <num_delayed_states> <filter_status>" (utime: the
+//     publisher's CLOCK_REALTIME, so a line tells which navd process sent it). Exit 1 when the
+//     log has none.
+//
+//   navd_vm_tool checkpoint CONFIG DIR
+//     What a restarted navd would resume from: the newest checkpoint of DIR that decodes into a
+//     filter built from CONFIG (navd's own resume_nav_filter(), input identity "live"), as
+//     "path=P delayed_states=N images=I validity_us=T applied=K"; delayed states = the ESDF's
+//     blocks minus the robot's, as NAVD_SOLUTION counts them (link_publisher.cpp). Exit 1 when
+//     no checkpoint decodes.
+//
+//   navd_vm_tool tty-release TTY...
+//     Clears the exclusive mode (ioctl TIOCNXCL) of each terminal, as root: what the kernel's
+//     last close does to a real serial port when the navd holding it dies. The HIL player's
+//     pseudo-terminals outlive that close (the player keeps their masters open), so the
+//     TIOCEXCL a killed navd set stays and the restarted navd's open() gets EBUSY. Exit 1 with
+//     the terminal and errno when one fails.
+#include <fcntl.h>
+#include <sys/ioctl.h>
+#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
 #include <navlcm/health_t.hpp>
+#include <navlcm/nav_solution_t.hpp>
 #include <string>
 #include <variant>
 #include <vector>
 
+#include "nav/daemon/checkpoint/nav_filter_checkpointer.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/log/dive_log.h"
 #include "nav/drivers/codecs/can_signals.h"
 #include "nav/drivers/codecs/candump_log.h"
@@ -203,6 +232,64 @@ int health(const std::string& path) {
   return 0;
 }
 
+int solutions(const std::string& path) {
+  lcm::LogFile log(path, "r");
+  if (!log.good()) throw std::runtime_error(path + ": cannot open as an LCM log");
+  long long count = 0;
+  while (const lcm::LogEvent* e = log.readNextEvent()) {
+    if (e->channel != "NAVD_SOLUTION") continue;
+    navlcm::nav_solution_t msg;
+    if (msg.decode(e->data, 0, e->datalen) < 0)
+      throw std::runtime_error(path + ": a NAVD_SOLUTION message does not decode as nav_solution_t");
+    std::printf("%lld %lld %d %d\n", static_cast<long long>(msg.utime),
+                static_cast<long long>(msg.time_of_validity_us), msg.num_delayed_states,
+                static_cast<int>(msg.filter_status));
+    ++count;
+  }
+  if (count == 0) {
+    std::fprintf(stderr, "navd_vm_tool solutions: %s has no NAVD_SOLUTION message\n", path.c_str());
+    return 1;
+  }
+  return 0;
+}
+
+int checkpoint(const std::string& config_path, const std::string& dir) {
+  const nav::daemon::NavdConfig config = nav::daemon::load_config_file(config_path);
+  const nav::daemon::NavFilterOptions options = nav::daemon::filter_options_from_config(config);
+  // No registration table: decoding needs none (pending pairs are not checkpointed).
+  auto make = [&] { return std::make_unique<nav::daemon::NavFilter>(options, nullptr); };
+  const nav::daemon::ResumedNavFilter resumed = nav::daemon::resume_nav_filter(dir, make, "live");
+  for (const nav::daemon::SkippedCheckpoint& k : resumed.skipped) {
+    std::fprintf(stderr, "navd_vm_tool checkpoint: %s skipped: %s\n", k.path.c_str(),
+                 k.reason.c_str());
+  }
+  if (!resumed.filter) {
+    std::fprintf(stderr, "navd_vm_tool checkpoint: no checkpoint in %s decodes with %s\n",
+                 dir.c_str(), config_path.c_str());
+    return 1;
+  }
+  std::printf("path=%s delayed_states=%d images=%zu validity_us=%lld applied=%llu\n",
+              resumed.path.c_str(), resumed.filter->esdf().num_blocks() - 1,
+              resumed.filter->images().size(),
+              static_cast<long long>(resumed.point.validity_us),
+              static_cast<unsigned long long>(resumed.point.applied));
+  return 0;
+}
+
+int tty_release(const std::vector<std::string>& ttys) {
+  int failed = 0;
+  for (const std::string& tty : ttys) {
+    const int fd = ::open(tty.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0 || ::ioctl(fd, TIOCNXCL) != 0) {
+      std::fprintf(stderr, "navd_vm_tool tty-release: %s: %s %s\n", tty.c_str(),
+                   fd < 0 ? "open" : "ioctl TIOCNXCL", std::strerror(errno));
+      ++failed;
+    }
+    if (fd >= 0) ::close(fd);
+  }
+  return failed == 0 ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -210,12 +297,18 @@ int main(int argc, char** argv) {
   try {
     if (args.size() == 4 && args[0] == "can-dive") return can_dive(args[1], args[2], args[3]);
     if (args.size() == 2 && args[0] == "health") return health(args[1]);
+    if (args.size() == 2 && args[0] == "solutions") return solutions(args[1]);
+    if (args.size() == 3 && args[0] == "checkpoint") return checkpoint(args[1], args[2]);
+    if (args.size() >= 2 && args[0] == "tty-release") return tty_release({args.begin() + 1, args.end()});
   } catch (const std::exception& e) {
     std::fprintf(stderr, "navd_vm_tool %s: %s\n", args[0].c_str(), e.what());
     return 1;
   }
   std::fprintf(stderr,
                "usage: navd_vm_tool can-dive IN_DIVE OUT_DIVE SIGNALS_FILE\n"
-               "       navd_vm_tool health LCM_LOG\n");
+               "       navd_vm_tool health LCM_LOG\n"
+               "       navd_vm_tool solutions LCM_LOG\n"
+               "       navd_vm_tool checkpoint CONFIG DIR\n"
+               "       navd_vm_tool tty-release TTY...\n");
   return 2;
 }
