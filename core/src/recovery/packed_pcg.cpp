@@ -15,11 +15,16 @@ namespace {
 typedef double v8d __attribute__((vector_size(64)));
 constexpr int kLanes = 8;
 
-// Each hot loop is compiled three times and the best one for the CPU is chosen at load time
-// (GNU ifunc). The project builds for baseline x86-64, so without this the kernels would be
-// limited to SSE2.
+// On x86-64 each hot loop is compiled three times and the best one for the CPU is chosen at
+// load time (GNU ifunc). The project builds for baseline x86-64, so without this the kernels
+// would be limited to SSE2. Elsewhere (aarch64, armhf) the generic vectors map onto the
+// target's own SIMD (NEON) with one version.
+#if defined(__x86_64__)
 #define NAV_PACKED_KERNEL \
   __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define NAV_PACKED_KERNEL
+#endif
 
 // Unaligned, aliasing access to 8 doubles. Macros, not functions: returning a vector type by
 // value from a function compiled for the baseline ISA would change the ABI (-Wpsabi).
