@@ -21,9 +21,11 @@
 //   that time. Before each prediction the robot is relinearised in O(1) at its conditional
 //   mean given its neighbours: μ_r = Λ_rr⁻¹(η_r − Σ_j Λ_rj μ_j) (angles not wrapped: μ must
 //   stay on the branch η encodes).
-// * Update: each aid source's observation is fused into the ESDF and, as a Kalman update of
-//   B_rr, into the robot bound (still an upper bound of Σ_rr), so the bound stored for each new
-//   delayed state stays tight.
+// * Update: each aid source's observation passes its innovation gate (aid_gate.h: NIS against
+//   a chi-square gate, runs of rejections, reset after a timeout; a rejected one changes
+//   nothing and is counted in innovations()) and is fused into the ESDF and, as a Kalman update
+//   of B_rr, into the robot bound (still an upper bound of Σ_rr), so the bound stored for each
+//   new delayed state stays tight.
 // * Image at t: predict to t; extend the warm start across everything since the last recovery
 //   (warm_start_tracker.h); recovery_.iterations_per_step PCG iterations on the current Λ, η
 //   (or, with a recovery executor, the true residual of the previous job's extended result:
@@ -166,6 +168,7 @@ class NavFilter {
   RecoverySchedule jobs_;
   LinkProposer proposer_;
   LinkGate gate_;
+  AidGate aid_gate_;
   PendingRegistrations pending_;
   WarmStartTracker warm_;
   Initialisation init_;
