@@ -163,6 +163,28 @@ TEST(AidGate, ARealHeadingStepIsFusedAgainAfterTheTimeout) {
   EXPECT_LT(s.last[2].test_ratio, 1.0);
 }
 
+TEST(AidGate, AHeadingBackAfterAFaultIsNotLockedOutAgainAfterTheReset) {
+  // The vehicle starts turning at 0.1 rad/s at 20 s while the heading sensor is stuck at 1 rad
+  // (20-28 s); the dead-reckoned heading keeps its old rate. The honest heading from 28 s is
+  // refused until the 10-s reset (30 s), fused again, and the estimate must then follow it
+  // without a new run locking it out (the turn rate is learnt while the reset lasts).
+  const auto truth = [](std::int64_t t_us) {
+    const double t_s = 1e-6 * static_cast<double>(t_us);
+    return std::remainder(t_s < 20.0 ? 0.0 : 0.1 * (t_s - 20.0), 2.0 * M_PI);
+  };
+  NavFilter f(options(10.0), nullptr);
+  feed(f, straight(0.0, 20.0));
+  feed(f, run(20.0, 28.0, [](std::int64_t) { return 1.0; }));
+  feed(f, run(28.0, 40.0, truth));
+  const std::uint64_t rejected = record_of(f, "attitude").rejected;
+  EXPECT_GT(record_of(f, "attitude").gate_resets, 0u);
+  feed(f, run(40.0, 60.0, truth));
+  EXPECT_EQ(record_of(f, "attitude").rejected, rejected) << "refused again after the reset";
+  const double error = std::remainder(
+      f.esdf().mean_block(Esdf::kRobotBlock)(5) - truth(f.time_us()), 2.0 * M_PI);
+  EXPECT_NEAR(error, 0.0, 0.01);
+}
+
 TEST(AidGate, ChiSquareGatesMatchClosedForms) {
   const AidGate gate(AidGateOptions{});
   // 1 dof: g²; 2 dof: -2 ln(1 - p) with 1 - p = erfc(g / sqrt 2).
