@@ -95,8 +95,15 @@ AidGateDecision AidGate::decide(std::size_t sensor, AidKind kind, std::int64_t t
     return d;
   }
   if (run.resetting) {
-    if (d.test_ratio <= 1.0) run.start_us = -1;  // the estimate came to the sensor
-    d.reset = run.start_us >= 0;
+    // start_us: the last update that failed the gate on the current S. The run closes once
+    // every update has passed for kResetSettleS (the estimate came to the sensor, its rates too).
+    if (d.test_ratio > 1.0) run.start_us = t_us;
+    if (t_us - run.start_us >= static_cast<std::int64_t>(kResetSettleS * 1e6)) {
+      run.start_us = -1;
+      run.resetting = false;
+      return d;
+    }
+    d.reset = true;
     return d;
   }
   // In a run: against the covariance it opened with (the file comment).
@@ -110,6 +117,7 @@ AidGateDecision AidGate::decide(std::size_t sensor, AidKind kind, std::int64_t t
   const auto timeout_us = static_cast<std::int64_t>(std::llround(options_.reset_timeout_s * 1e6));
   if (t_us - run.start_us >= timeout_us) {
     run.resetting = true;  // EKF2's reset after a timeout: fuse until the gate passes
+    run.start_us = t_us;
     d.reset = true;
     d.reset_started = true;
     return d;

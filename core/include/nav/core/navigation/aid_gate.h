@@ -19,8 +19,10 @@
 // the tracked P at the run's first rejection: an isolated outlier ends the run at the next good
 // measurement (its innovation fits the P it had before); garbage or a stuck sensor stays out.
 // Reset after timeout (EKF2's reset on a timed-out aid source): once the run has lasted
-// reset_timeout_s of data time the kind is fused again, every update, until one passes the
-// gate against the current S (the estimate has come to the sensor) and the run closes. The
+// reset_timeout_s of data time the kind is fused again, every update, until all have passed
+// the gate against the current S for kResetSettleS (the estimate has come to the sensor, and
+// the rates learnt while dead-reckoning have converged: closing at the first pass opened a new
+// run on the post-reset covariance at once, docs/faults.md) and the run closes. The
 // trade-off: a real step of the sensor (a heading jump, a DVL whose velocity the estimate lost
 // beyond P_run) is refused for reset_timeout_s while the filter dead-reckons; a fault longer
 // than reset_timeout_s is fused after it. The default, 60 s, outlasts the fault campaign's
@@ -42,6 +44,7 @@ namespace nav::core {
 
 enum class AidKind { kDvl = 0, kRollPitch = 1, kHeading = 2, kDepth = 3 };
 inline constexpr int kNumAidKinds = 4;
+inline constexpr double kResetSettleS = 2.0;  ///< passes a reset needs to close its run, s
 
 struct AidGateOptions {
   /// Gates in standard deviations of a scalar innovation, each in [0, 1000]; 0: off.
@@ -82,7 +85,7 @@ class AidGate {
 
  private:
   struct Run {
-    std::int64_t start_us = -1;  ///< first rejection (-1: no run)
+    std::int64_t start_us = -1;  ///< first rejection (-1: no run); resetting: last failure
     bool resetting = false;
     Mat12 P = Mat12::Zero();     ///< tracked P at the first rejection
   };
