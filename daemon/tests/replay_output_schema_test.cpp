@@ -251,6 +251,7 @@ ReplaySummary full_summary() {
   s.states_checked = 866;
   s.measurements = 123456;
   s.late_dropped = 3;
+  s.rejected_updates = {{"dvl", 4}, {"heading", 0}};
   return s;
 }
 
@@ -270,6 +271,7 @@ TEST(ReplaySummary, JsonRoundTripKeepsEveryField) {
   EXPECT_EQ(r.links.proposed, 8633u);
   EXPECT_EQ(r.links.outliers_rejected, 438u);
   EXPECT_EQ(r.late_dropped, 3u);
+  EXPECT_EQ(r.rejected_updates, s.rejected_updates);
 
   // The keys scripts and tests read (README.md "navtool replay"), with their values.
   const nlohmann::json j = nlohmann::json::parse(text);
@@ -285,7 +287,8 @@ TEST(ReplaySummary, JsonRoundTripKeepsEveryField) {
                           "published_nees_exceed_99_fraction"}) {
     EXPECT_TRUE(j.contains(key)) << key;
   }
-  EXPECT_EQ(j.size(), 43u);  // every key of today's summary.json
+  EXPECT_EQ(j["rejected_updates"]["dvl"], 4);
+  EXPECT_EQ(j.size(), 44u);  // every key of today's summary.json
 }
 
 TEST(ReplaySummary, PartialOrOddSummariesKeepDefaults) {

@@ -29,15 +29,17 @@ SensorInnovation& SensorInnovationStats::slot(const SensorModels& models, std::s
 void SensorInnovationStats::record(const SensorModels& models, std::size_t sensor, const char* what,
                                    std::int64_t t_us, const MeasVec& z,
                                    const MeasCov& R, const InnovationSample& sample,
-                                   bool fused) {
+                                   bool fused, bool reset, double gate_sigma) {
   SensorInnovation& s = slot(models, sensor);
+  const double g = gate_sigma > 0.0 ? gate_sigma : kTestRatioGateSigma;
   if (fused) {
     ++s.updates;
+    if (reset) ++s.gate_resets;
   } else {
     ++s.rejected;
   }
   const int dim = static_cast<int>(z.size());
-  if (fused && sample.valid) {
+  if (sample.valid) {  // gated ones too: the monitor shows what the sensor said
     ++s.nis_count;
     s.nis_sum += sample.nis;
     s.dim_sum += dim;
@@ -63,7 +65,7 @@ void SensorInnovationStats::record(const SensorModels& models, std::size_t senso
     c.innovation_variance = sample.S.rows() > row ? sample.S(row, row) : 0.0;
     c.test_ratio = c.innovation_variance > 0.0
                        ? c.innovation * c.innovation /
-                             (kTestRatioGateSigma * kTestRatioGateSigma * c.innovation_variance)
+                             (g * g * c.innovation_variance)
                        : 0.0;
     c.fused = fused;
   }

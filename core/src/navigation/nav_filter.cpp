@@ -106,6 +106,7 @@ NavFilter::NavFilter(NavFilterOptions options, const RegistrationTable* registra
       proposer_(options_.proposal, footprint_half_extent_per_altitude(options_.sensors),
                 camera_mount(sensors_)),
       gate_(options_.camera_gate_chi2, options_.warn),
+      aid_gate_(options_.aid_gate),
       pending_(options_.registration_wait_s, options_.max_pending_registrations),
       altitude_m_(options_.default_altitude_m) {
   image_of_block_.push_back(-1);
@@ -342,8 +343,23 @@ void NavFilter::fuse(const AidObservation<Model>& aid) {
   MeasJac H;
   const MeasVec h = aid.model.predict(filter_.mean_block(r), &H);  // as the update below
   const InnovationSample innovation = innovation_sample(aid.model, aid.z, h, H, warm_.P, aid.R);
+  const AidGateDecision gate =
+      aid_gate_.decide(aid.sensor, aid.gate_kind, time_us_, innovation.nu, H, aid.R, warm_.P,
+                       innovation.valid ? innovation.nis : -1.0);
+  if (gate.run_started || gate.reset_started) {
+    warn(std::string("NavFilter: ") + aid.kind + " from sensor '" + sensors_.name(aid.sensor) +
+         "' at t = " + std::to_string(time_us_) + " us " +
+         (gate.reset_started ? "fused again after its reset timeout" : "gated") + ": test ratio " +
+         std::to_string(gate.test_ratio) + " (further ones counted in its rejected updates)");
+  }
+  if (!gate.fuse) {
+    innovations_.record(sensors_, aid.sensor, aid.kind, time_us_, aid.z, aid.R, innovation, false,
+                        false, gate.gate_sigma);
+    return;
+  }
   const Status s = filter_.update(aid.model, r, aid.z, aid.R);
-  innovations_.record(sensors_, aid.sensor, aid.kind, time_us_, aid.z, aid.R, innovation, s.ok());
+  innovations_.record(sensors_, aid.sensor, aid.kind, time_us_, aid.z, aid.R, innovation, s.ok(),
+                      gate.reset, gate.gate_sigma);
   if (s.ok()) {
     ++counters_.updates;
     if (!bounds_.update_robot(H, aid.R).ok()) ++counters_.bound_update_failures;

@@ -34,7 +34,9 @@ FilterConfig parse_filter(const YamlReader& f) {
                 "gating_chi2_threshold", "recovery_thread", "recovery_handoff_s",
                 "recovery_preconditioner", "recovery_refresh_interval",
                 "registration_wait_s", "max_pending_registrations", "proposal_min_probability",
-                "proposal_min_overlap", "proposal_max_per_image"});
+                "proposal_min_overlap", "proposal_max_per_image", "dvl_gate_sigma",
+                "roll_pitch_gate_sigma", "heading_gate_sigma", "depth_gate_sigma",
+                "aid_gate_reset_s"});
   FilterConfig filter;
   if (f.has("process_noise_psd")) {
     const YamlReader p = f.at("process_noise_psd");
@@ -63,6 +65,11 @@ FilterConfig parse_filter(const YamlReader& f) {
   f.read("proposal_min_probability", filter.proposal_min_probability, 1e-9, 1.0 - 1e-9);
   f.read("proposal_min_overlap", filter.proposal_min_overlap, 1e-3, 1.0);
   f.read("proposal_max_per_image", filter.proposal_max_per_image, 1, 100000);
+  f.read("dvl_gate_sigma", filter.aid_gate.dvl_sigma, 0.0, 1000.0);
+  f.read("roll_pitch_gate_sigma", filter.aid_gate.roll_pitch_sigma, 0.0, 1000.0);
+  f.read("heading_gate_sigma", filter.aid_gate.heading_sigma, 0.0, 1000.0);
+  f.read("depth_gate_sigma", filter.aid_gate.depth_sigma, 0.0, 1000.0);
+  f.read("aid_gate_reset_s", filter.aid_gate.reset_timeout_s, 0.0, 1e6);
   return filter;
 }
 

@@ -40,6 +40,7 @@ core::NavFilterOptions filter_options_from_config(const NavdConfig& config) {
   o.recovery.refresh_interval = config.filter.recovery_refresh_interval;
   o.camera_gate_chi2 =
       core::equivalent_chi_square_gate(config.filter.gating_chi2_threshold, 6, 5);
+  o.aid_gate = config.filter.aid_gate;
   o.recovery_thread = config.filter.recovery_thread;
   o.recovery_handoff_s = config.filter.recovery_handoff_s;
   if (o.recovery_thread) o.recovery_executor = threaded_recovery_executor();

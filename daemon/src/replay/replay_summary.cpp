@@ -128,6 +128,7 @@ std::string ReplaySummary::to_json() const {
   j["measurements"] = measurements;
   j["updates"] = updates;
   j["update_failures"] = update_failures;
+  j["rejected_updates"] = rejected_updates;
   j["recovery_failures"] = recovery_failures;
   j["bound_update_failures"] = bound_update_failures;
   j["before_initialisation"] = before_initialisation;
@@ -198,6 +199,11 @@ ReplaySummary ReplaySummary::from_json(const std::string& text, const std::strin
   read(j, "measurements", s.measurements);
   read(j, "updates", s.updates);
   read(j, "update_failures", s.update_failures);
+  if (j.contains("rejected_updates") && j["rejected_updates"].is_object()) {
+    for (const auto& [name, n] : j["rejected_updates"].items()) {
+      if (n.is_number_unsigned()) s.rejected_updates[name] = n.get<std::uint64_t>();
+    }
+  }
   read(j, "recovery_failures", s.recovery_failures);
   read(j, "bound_update_failures", s.bound_update_failures);
   read(j, "before_initialisation", s.before_initialisation);
@@ -252,6 +258,9 @@ ReplaySummary make_replay_summary(const ReplayRun& run, const ReplayAnalysis& an
   s.measurements = c.measurements;
   s.updates = c.updates;
   s.update_failures = c.update_failures;
+  for (const SensorInnovation& r : run.slam->innovations().sensors()) {
+    s.rejected_updates[r.name] = r.rejected;
+  }
   s.recovery_failures = c.recovery_failures;
   s.bound_update_failures = c.bound_update_failures;
   s.before_initialisation = c.before_initialisation;

@@ -15,6 +15,7 @@
 
 #include "nav/core/models/measurement.h"
 #include "nav/core/models/unary_models.h"
+#include "nav/core/navigation/aid_gate.h"
 #include "nav/core/navigation/sensor_measurements.h"
 #include "nav/core/navigation/sensor_models.h"
 
@@ -27,6 +28,7 @@ struct AidObservation {
   MeasVec z;
   MeasCov R;
   const char* kind;    ///< "DVL", "roll/pitch", "heading", "depth" (string literals)
+  AidKind gate_kind;   ///< its innovation gate (aid_gate.h)
   std::size_t sensor;  ///< index into NavFilterOptions::sensors
 };
 

@@ -11,7 +11,8 @@
 // are not in it, so P can only be larger than Σ_rr and the NIS smaller). For a consistent filter
 // NIS ~ chi²(dim z): its mean is dim z (Bar-Shalom, Li & Kirubarajan 2001, §5.4). A biased or
 // mis-modelled sensor shows a mean NIS far above its dimension.
-// Per component k: test ratio ν_k² / (g² S_kk) with g = kTestRatioGateSigma (> 1: beyond 3 sigma).
+// Per component k: test ratio ν_k² / (g² S_kk) with g the update's gate in sigmas (aid_gate.h;
+// kTestRatioGateSigma = 3 when its gate is off): > 1 beyond the gate.
 //
 // Counters are cumulative (never reset): a reader takes the mean over its own period from two
 // snapshots (innovation_period). Owned by NavFilter's thread; a sensor's slot is created (with
@@ -57,8 +58,9 @@ struct SensorInnovation {
   std::size_t sensor = 0;       ///< NavFilterOptions::sensors index
   std::string name;             ///< its SensorModelOptions::name
   std::uint64_t updates = 0;    ///< updates applied (fused)
-  std::uint64_t rejected = 0;   ///< updates the ESDF refused (not fused)
-  std::uint64_t nis_count = 0;  ///< fused updates with a valid NIS (summed below)
+  std::uint64_t rejected = 0;   ///< updates not fused: gated (aid_gate.h) or refused by the ESDF
+  std::uint64_t gate_resets = 0;  ///< of the fused: fused by the gate's timeout reset
+  std::uint64_t nis_count = 0;  ///< updates (fused or not) with a valid NIS (summed below)
   double nis_sum = 0.0;         ///< Σ NIS over those
   double dim_sum = 0.0;         ///< Σ dim z over those (the NIS sum's expected value)
   double nis_last = -1.0;       ///< of the last update (-1: none valid yet)
@@ -89,10 +91,11 @@ InnovationPeriod innovation_period(const SensorInnovation& now, const SensorInno
 class SensorInnovationStats {
  public:
   /// Records one update of `sensor` of kind `what` (a string literal: kinds are told apart by
-  /// address) at t_us; `fused` = the ESDF applied it.
+  /// address) at t_us; `fused` = the gate passed it and the ESDF applied it, `reset` = the
+  /// gate's timeout reset passed it; gate_sigma = its gate in sigmas (<= 0: off).
   void record(const SensorModels& models, std::size_t sensor, const char* what, std::int64_t t_us,
               const MeasVec& z, const MeasCov& R, const InnovationSample& sample,
-              bool fused);
+              bool fused, bool reset = false, double gate_sigma = kTestRatioGateSigma);
   /// One entry per sensor that has had an update, in order of first update.
   const std::vector<SensorInnovation>& sensors() const { return sensors_; }
 

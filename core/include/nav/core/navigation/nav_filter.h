@@ -23,9 +23,11 @@
 //   stay on the branch η encodes).
 //   A step the model cannot take (pitch beyond +-89.5 deg) is held instead (held_prediction.h:
 //   attitude and rates treated as lost, counted in predictions_held): the filter goes on.
-// * Update: each aid source's observation is fused into the ESDF and, as a Kalman update of
-//   B_rr, into the robot bound (still an upper bound of Σ_rr), so the bound stored for each new
-//   delayed state stays tight.
+// * Update: each aid source's observation passes its innovation gate (aid_gate.h: NIS against
+//   a chi-square gate, runs of rejections, reset after a timeout; a rejected one changes
+//   nothing and is counted in innovations()) and is fused into the ESDF and, as a Kalman update
+//   of B_rr, into the robot bound (still an upper bound of Σ_rr), so the bound stored for each
+//   new delayed state stays tight.
 // * Image at t: predict to t; extend the warm start across everything since the last recovery
 //   (warm_start_tracker.h); recovery_.iterations_per_step PCG iterations on the current Λ, η
 //   (or, with a recovery executor, the true residual of the previous job's extended result:
@@ -168,6 +170,7 @@ class NavFilter {
   RecoverySchedule jobs_;
   LinkProposer proposer_;
   LinkGate gate_;
+  AidGate aid_gate_;
   PendingRegistrations pending_;
   WarmStartTracker warm_;
   Initialisation init_;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "nav/core/models/constant_velocity.h"
+#include "nav/core/navigation/aid_gate.h"
 #include "nav/core/navigation/link_proposer.h"
 #include "nav/core/navigation/recovery_executor.h"
 #include "nav/core/navigation/sensor_models.h"
@@ -41,6 +42,8 @@ struct NavFilterOptions {
   /// Link hypotheses: probability, overlap fraction and per-image cap (link_proposer.h).
   LinkProposerOptions proposal;
   double camera_gate_chi2 = 15.086;        ///< 5-dof gate (chi2 99 %)
+  /// Innovation gates of the DVL, attitude and depth updates and their reset (aid_gate.h).
+  AidGateOptions aid_gate;
   /// PCG iterations per image; block Jacobi by default (the factor preconditioner refactors Λ
   /// at every image: opt-in, docs/performance.md).
   StateRecoveryOptions recovery = block_jacobi_recovery();

@@ -3,6 +3,7 @@
 // core::NavFilterOptions by filter/filter_options.h.
 
 #include "nav/core/models/constant_velocity.h"
+#include "nav/core/navigation/aid_gate.h"
 #include "nav/core/recovery/state_recovery.h"
 
 namespace nav::daemon {
@@ -12,6 +13,10 @@ struct FilterConfig {
   int cg_iterations_per_step = 5;               ///< [1, 1000]
   double latency_window_ms = 200.0;             ///< [0, 60000]
   double gating_chi2_threshold = 16.81;         ///< [1e-6, 1e6]; 16.81 = chi2(6 dof, 99 %)
+  /// Innovation gates of the DVL, roll/pitch, heading and depth updates in sigmas ([0, 1000],
+  /// 0: off) and the reset after a run of rejections, s ([0, 1e6]): *_gate_sigma and
+  /// aid_gate_reset_s (nav/core/navigation/aid_gate.h).
+  core::AidGateOptions aid_gate;
   /// PCG iterations on the recovery thread (true) or synchronously at each image (false, the
   /// default: the thread made the default dive's replay ~15 % slower, README "Recovery thread").
   bool recovery_thread = false;

@@ -30,6 +30,7 @@ using core::to_string;
 ///   PCG iterations per image;
 /// * camera_gate_chi2 = the 5-dof gate at the probability of the 6-dof
 ///   filter.gating_chi2_threshold (chi_square.h);
+/// * aid_gate = filter.{dvl,roll_pitch,heading,depth}_gate_sigma, filter.aid_gate_reset_s;
 /// * recovery_thread / recovery_handoff_s / registration_wait_s / max_pending_registrations
 ///   from filter.*; with recovery_thread the jobs run on a RecoveryWorker thread
 ///   (recovery_worker.h);

@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -92,6 +93,9 @@ struct ReplaySummary {
   std::uint64_t measurements = 0, updates = 0, update_failures = 0, recovery_failures = 0;
   std::uint64_t bound_update_failures = 0, before_initialisation = 0;
   std::uint64_t decode_errors = 0, late_dropped = 0, ordering_full_dropped = 0;
+  /// Per sensor name: its robot updates not fused (innovation gate, nav/core/navigation/
+  /// aid_gate.h, or refused by the ESDF); key "rejected_updates", an object.
+  std::map<std::string, std::uint64_t> rejected_updates;
 
   std::string error;  ///< empty when the replay and the analysis succeeded
 
