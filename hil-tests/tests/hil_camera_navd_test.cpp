@@ -22,6 +22,7 @@
 #include "../../daemon/tests/support/net_namespace.h"
 #include "../../daemon/tests/support/udpm_probe.h"
 #include "nav/hil/dive_player.h"
+#include "support/background_play.h"
 #include "support/sim_dive.h"
 
 namespace {
@@ -71,16 +72,10 @@ TEST(HilCameraNavd, NavdGetsTheDivesFramesAtTheDivesImageTimes) {
   player.write_navd_config(dir / "navd.yaml", kUdpmUrl);
   const pid_t navd = nav::tool::test::spawn_navd({"--config", (dir / "navd.yaml").string()}, dir);
   ASSERT_GT(navd, 0);
-  std::atomic<bool> stop{false}, done{false};
-  nav::hil::PlayReport report;
-  std::thread play([&] {
-    report = player.play(stop);
-    done.store(true);
-  });
+  nav::hil::test::BackgroundPlay play(player);
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(50);
-  while (!done.load() && std::chrono::steady_clock::now() < give_up) lcm.handleTimeout(20);
-  stop.store(true);
-  play.join();
+  while (!play.done() && std::chrono::steady_clock::now() < give_up) lcm.handleTimeout(20);
+  const nav::hil::PlayReport report = play.finish();
   for (int i = 0; i < 10; ++i) lcm.handleTimeout(20);
   ASSERT_EQ(::kill(navd, SIGTERM), 0);
   EXPECT_EQ(nav::tool::test::wait_exit(navd, std::chrono::seconds(5)), 0)

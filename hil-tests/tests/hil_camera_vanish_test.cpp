@@ -16,6 +16,7 @@
 #include "nav/daemon/system/host_clock.h"
 #include "nav/drivers/transports/gige_camera.h"
 #include "nav/hil/dive_player.h"
+#include "support/background_play.h"
 #include "support/sim_dive.h"
 
 namespace {
@@ -61,16 +62,11 @@ TEST(HilCameraVanish, TheDriverSeesTheCameraGoAndOpensItAgainWhenItReturns) {
   std::unique_ptr<GigeCamera> camera = open_camera();
   if (!camera) GTEST_SKIP() << "the fake GigE camera is not served here";
 
-  std::atomic<bool> stop{false}, played{false};
-  nav::hil::PlayReport report;
-  std::thread play([&] {
-    report = player.play(stop);
-    played.store(true);
-  });
+  nav::hil::test::BackgroundPlay play(player);
   std::int64_t frames = 0, lost_at_us = 0, reopened_at_us = 0;
   nav::drivers::CameraFrame frame;
   const std::int64_t give_up_us = nav::daemon::monotonic_us() + 60'000'000;
-  while (!played.load() && nav::daemon::monotonic_us() < give_up_us) {
+  while (!play.done() && nav::daemon::monotonic_us() < give_up_us) {
     if (!camera) {  // navd's camera thread: open again after a backoff
       std::this_thread::sleep_for(std::chrono::milliseconds(200));
       if ((camera = open_camera())) reopened_at_us = nav::daemon::monotonic_us();
@@ -86,8 +82,7 @@ TEST(HilCameraVanish, TheDriverSeesTheCameraGoAndOpensItAgainWhenItReturns) {
     }
   }
   for (int i = 0; camera && i < 5; ++i) frames += camera->grab(frame, std::chrono::seconds(1)).ok();
-  stop.store(true);
-  play.join();
+  const nav::hil::PlayReport report = play.finish();
 
   const double vanish_us = host_start_us.load() + kVanishFromS * 1e6 / kSpeed;
   const double back_us = host_start_us.load() + kVanishToS * 1e6 / kSpeed;

@@ -34,6 +34,7 @@
 #include "../../daemon/tests/support/udpm_probe.h"
 #include "nav/daemon/system/host_clock.h"
 #include "nav/hil/dive_player.h"
+#include "support/background_play.h"
 #include "support/oracle_vision.h"
 #include "support/sim_dive.h"
 
@@ -193,22 +194,16 @@ TEST(HilPlayback, NavdOnPlayedPtysTracksTheTruthAndReportsHealthyRates) {
   const pid_t navd = nav::tool::test::spawn_navd({"--config", (dir / "navd.yaml").string()}, dir);
   ASSERT_GT(navd, 0);
 
-  std::atomic<bool> stop{false}, done{false};
-  nav::hil::PlayReport report;
-  std::thread play([&] {
-    report = player.play(stop);
-    done.store(true);
-  });
+  nav::hil::test::BackgroundPlay play(player);
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(75);
-  while (!done.load() && std::chrono::steady_clock::now() < give_up) {
+  while (!play.done() && std::chrono::steady_clock::now() < give_up) {
     if (udpm)
       lcm.handleTimeout(20);
     else
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   const std::int64_t played_to_utime = nav::daemon::realtime_us();
-  stop.store(true);
-  play.join();
+  const nav::hil::PlayReport report = play.finish();
   for (int i = 0; i < 10 && udpm; ++i) lcm.handleTimeout(20);
 
   ASSERT_EQ(nav::tool::test::wait_exit(navd, std::chrono::milliseconds(1)), -1)

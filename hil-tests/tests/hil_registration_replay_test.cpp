@@ -18,17 +18,18 @@
 #include <spawn.h>
 
 #include <atomic>
-#include <set>
 #include <lcm/lcm-cpp.hpp>
 #include <navlcm/health_t.hpp>
 #include <navlcm/link_proposal_t.hpp>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <thread>
 
 #include "../../daemon/tests/support/navd_process.h"
 #include "../../daemon/tests/support/net_namespace.h"
 #include "../../daemon/tests/support/udpm_probe.h"
 #include "nav/hil/dive_player.h"
+#include "support/background_play.h"
 #include "support/oracle_vision.h"
 #include "support/sim_dive.h"
 
@@ -71,8 +72,9 @@ struct LiveRun {
 };
 
 /// One live run of the dive in `dir`/dive with the oracle answering; `during` is started when
-/// the player starts (navd has opened its devices, so it listens; a logger or a log player). A log player is waited for (up to 15 s)
-/// before navd stops, so all of its log reaches navd; a logger is stopped (SIGINT) after navd.
+/// the player starts (navd has opened its devices, so it listens; a logger or a log player). A log
+/// player is waited for (up to 15 s) before navd stops, so all of its log reaches navd; a logger is
+/// stopped (SIGINT) after navd.
 LiveRun run_live(const fs::path& dir, const std::string& name,
                  const std::vector<std::string>& during, bool wait_for_helper) {
   LiveRun run;
@@ -99,21 +101,16 @@ LiveRun run_live(const fs::path& dir, const std::string& name,
       nav::tool::test::spawn_navd({"--config", (run_dir / "navd.yaml").string()}, run_dir);
   EXPECT_GT(navd, 0);
   pid_t helper = 0;
-  std::atomic<bool> stop{false}, done{false};
-  std::thread play([&] {
-    player.play(stop);
-    done.store(true);
-  });
+  nav::hil::test::BackgroundPlay play(player);
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(50);
-  while (!done.load() && std::chrono::steady_clock::now() < give_up) {
+  while (!play.done() && std::chrono::steady_clock::now() < give_up) {
     lcm.handleTimeout(20);
     if (helper == 0 && started.load()) {
       helper = spawn(during);
       EXPECT_GT(helper, 0) << during.front() << " did not start";
     }
   }
-  stop.store(true);
-  play.join();
+  (void)play.finish();
   for (int i = 0; i < 25; ++i) lcm.handleTimeout(20);  // the last answers
   if (helper > 0 && wait_for_helper) {
     EXPECT_EQ(nav::tool::test::wait_exit(helper, std::chrono::seconds(15)), 0) << during.front();

@@ -33,6 +33,7 @@
 #include "../../daemon/tests/support/net_namespace.h"
 #include "../../daemon/tests/support/udpm_probe.h"
 #include "nav/hil/dive_player.h"
+#include "support/background_play.h"
 #include "support/oracle_vision.h"
 #include "support/sim_dive.h"
 
@@ -170,17 +171,11 @@ TEST(HilVisionLive, NavdRegistersItsOwnFramesAnswersInTimeAndAcceptsLinks) {
   const pid_t navd = nav::tool::test::spawn_navd({"--config", (dir / "navd.yaml").string()}, dir);
   ASSERT_GT(navd, 0);
 
-  std::atomic<bool> stop{false}, done{false};
-  nav::hil::PlayReport report;
-  std::thread play([&] {
-    report = player.play(stop);
-    done.store(true);
-  });
+  nav::hil::test::BackgroundPlay play(player);
   const auto give_up =
       std::chrono::steady_clock::now() + std::chrono::seconds(40 + 10 * dive_images());
-  while (!done.load() && std::chrono::steady_clock::now() < give_up) lcm.handleTimeout(20);
-  stop.store(true);
-  play.join();
+  while (!play.done() && std::chrono::steady_clock::now() < give_up) lcm.handleTimeout(20);
+  const nav::hil::PlayReport report = play.finish();
   // The last image's pairs: answered within their wait (filter.registration_wait_s, 10 s).
   const auto drain = std::chrono::steady_clock::now() + std::chrono::seconds(12);
   while (std::chrono::steady_clock::now() < drain && heard.answers.size() < heard.proposals.size())
