@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "nav/core/navigation/nav_filter.h"
+#include "nav/testing/filter_sensors.h"
 
 namespace nav::core {
 namespace {
@@ -26,11 +27,7 @@ constexpr std::size_t kDvl = 0, kAttitude = 1, kDepth = 2;
 
 NavFilterOptions options(double reset_timeout_s = 60.0) {
   NavFilterOptions o;
-  SensorModelOptions dvl, attitude, depth;
-  dvl.name = "dvl";
-  attitude.name = "attitude";
-  depth.name = "depth";
-  o.sensors = {dvl, attitude, depth};
+  o.sensors = nav::testing::named_sensors({"dvl", "attitude", "depth"});
   o.propose_links = false;
   // config/sim.yaml's yaw PSD: without heading updates the heading sigma reaches 0.3 rad in 8 s.
   o.process_noise.angular_accel_psd = Vec3(7e-5, 2.5e-5, 6e-4);
@@ -93,9 +90,9 @@ Measurement offset_message(const Case& c, std::int64_t t_us, double offset) {
 TEST(AidGate, RejectsATenSigmaOutlierBitIdenticallyAndFusesAOneSigmaOneForEachKind) {
   NavFilter settled(options(), nullptr);
   feed(settled, straight(0.0, 20.0));
-  for (const Case& c : {Case{"DVL surge", "dvl", 0}, Case{"DVL heave", "dvl", 2},
-                        Case{"roll", "attitude", 0}, Case{"pitch", "attitude", 1},
-                        Case{"heading", "attitude", 2}, Case{"depth", "depth", 0}}) {
+  for (const Case& c :
+       {Case{"DVL surge", "dvl", 0}, Case{"DVL heave", "dvl", 2}, Case{"roll", "attitude", 0},
+        Case{"pitch", "attitude", 1}, Case{"heading", "attitude", 2}, Case{"depth", "depth", 0}}) {
     const std::int64_t t_us = 20'050'000;
     // sqrt(S) of this component from the last update (the 50 ms prediction adds < 1 %).
     const InnovationComponent& last =
@@ -180,8 +177,8 @@ TEST(AidGate, AHeadingBackAfterAFaultIsNotLockedOutAgainAfterTheReset) {
   EXPECT_GT(record_of(f, "attitude").gate_resets, 0u);
   feed(f, run(40.0, 60.0, truth));
   EXPECT_EQ(record_of(f, "attitude").rejected, rejected) << "refused again after the reset";
-  const double error = std::remainder(
-      f.esdf().mean_block(Esdf::kRobotBlock)(5) - truth(f.time_us()), 2.0 * M_PI);
+  const double error =
+      std::remainder(f.esdf().mean_block(Esdf::kRobotBlock)(5) - truth(f.time_us()), 2.0 * M_PI);
   EXPECT_NEAR(error, 0.0, 0.01);
 }
 

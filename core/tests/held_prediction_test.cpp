@@ -2,8 +2,8 @@
 // constant-velocity model's +-89.5 deg (nav_filter.h "Predict"): F against central differences
 // at off-branch pitches, Q's inflation by hand, and a filter fed attitude messages with the
 // pitch at -175 deg (as navd saw after a 100x replay) that holds those steps, keeps every
-// published covariance positive definite (the pitch variance pi^2 after a held step), and predicts with the
-// model again once the attitude sensor brings the pitch back.
+// published covariance positive definite (the pitch variance pi^2 after a held step), and predicts
+// with the model again once the attitude sensor brings the pitch back.
 
 #include "nav/core/navigation/held_prediction.h"
 
@@ -19,6 +19,7 @@
 
 #include "nav/core/geometry/rotation.h"
 #include "nav/core/navigation/nav_filter.h"
+#include "nav/testing/filter_sensors.h"
 #include "pose_test_support.h"
 
 namespace nav::core {
@@ -91,11 +92,7 @@ std::vector<Measurement> run_with_pitch_off() {
 
 TEST(NavFilterHeldPrediction, PitchBeyondTheLimitIsHeldAndTheFilterGoesOn) {
   NavFilterOptions o;
-  SensorModelOptions dvl, attitude, depth;
-  dvl.name = "dvl";
-  attitude.name = "attitude";
-  depth.name = "depth";
-  o.sensors = {dvl, attitude, depth};
+  o.sensors = nav::testing::named_sensors({"dvl", "attitude", "depth"});
   // The fault is an attitude the innovation gate would refuse (aid_gate.h): the test is about
   // the model's limit, so the attitude is let in.
   o.aid_gate.roll_pitch_sigma = 0.0;
