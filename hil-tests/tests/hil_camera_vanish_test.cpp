@@ -1,7 +1,7 @@
 // The player's kCameraVanish fault (player_faults.h, camera_playback.h) against navd's GigE
 // driver (nav::drivers::GigeCamera, as navd's camera thread uses it): a short simulated dive at
 // 4 x with the fake GigE camera destroyed for the middle of the dive. Asserted: the driver's
-// grab reports the camera gone (kDisconnected, Aravis' heartbeat: control lost) after the
+// grab reports the camera gone (kDisconnected, from its GVCP probe or Aravis' heartbeat) after the
 // vanish and not before; a new driver opens the camera again once the player has restarted it;
 // every frame the player sent reaches the driver, and sent + vanished = the log's images, with
 // at least one image due while the camera was gone. The detection delay is printed.

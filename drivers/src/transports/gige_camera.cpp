@@ -8,6 +8,8 @@
 
 #include <algorithm>
 
+#include "gvcp_probe.h"
+
 namespace nav::drivers {
 namespace {
 
@@ -53,6 +55,12 @@ IoStatus GigeOptions::validate() const {
   if (buffer_count < 2 || buffer_count > 256) return bad("options.buffer_count must be in 2..256");
   if (frame_id_bits != 16 && frame_id_bits != 64)
     return bad("options.frame_id_bits must be 16 or 64");
+  if (liveness_probe_period_ms < 0 || liveness_probe_period_ms > 60000)
+    return bad("options.liveness_probe_period_ms must be in [0, 60000]");
+  if (liveness_probe_tries < 1 || liveness_probe_tries > 100)
+    return bad("options.liveness_probe_tries must be in [1, 100]");
+  if (liveness_probe_timeout_ms < 1 || liveness_probe_timeout_ms > 10000)
+    return bad("options.liveness_probe_timeout_ms must be in [1, 10000]");
   if (trigger_mode == TriggerMode::kHardware && trigger_source.empty()) {
     return bad("options.trigger_source is empty for hardware trigger");
   }
@@ -90,8 +98,40 @@ IoStatus GigeCamera::open() {
   control_lost_handler_ = g_signal_connect(arv_camera_get_device(camera_), "control-lost",
                                            G_CALLBACK(&GigeCamera::on_control_lost), this);
   IoStatus s = configure();
-  if (!s.ok()) close();
+  if (!s.ok()) {
+    close();
+    return s;
+  }
+  make_probe();
   return s;
+}
+
+void GigeCamera::make_probe() {
+  probe_.reset();
+  if (options_.liveness_probe_period_ms == 0 || !arv_camera_is_gv_device(camera_)) return;
+  auto* gv = ARV_GV_DEVICE(arv_camera_get_device(camera_));
+  GSocketAddress* address = arv_gv_device_get_device_address(gv);  // owned by the device
+  sockaddr_in device{};
+  if (address == nullptr || g_socket_address_get_family(address) != G_SOCKET_FAMILY_IPV4 ||
+      !g_socket_address_to_native(address, &device, sizeof device, nullptr)) {
+    return;  // not an IPv4 GVCP peer: the heartbeat alone watches it
+  }
+  probe_ = std::make_unique<GvcpProbe>(
+      device, std::chrono::milliseconds(options_.liveness_probe_timeout_ms),
+      options_.liveness_probe_tries);
+}
+
+IoStatus GigeCamera::probe_if_due() {
+  const auto now = std::chrono::steady_clock::now();
+  if (probe_ == nullptr || now < next_probe_) return IoStatus::Ok();
+  std::string why;
+  if (!probe_->answers(&why)) {
+    control_silent_ = true;  // stop() must not wait out Aravis' retries on AcquisitionStop
+    return IoStatus::Error(IoCode::kDisconnected, name_, "camera does not answer: " + why);
+  }
+  next_probe_ = std::chrono::steady_clock::now() +
+                std::chrono::milliseconds(options_.liveness_probe_period_ms);
+  return IoStatus::Ok();
 }
 
 IoStatus GigeCamera::configure() {
@@ -160,6 +200,7 @@ void GigeCamera::close() {
     control_lost_handler_ = 0;
     g_clear_object(&camera_);
   }
+  probe_.reset();
 }
 
 IoStatus GigeCamera::start() {
@@ -182,6 +223,8 @@ IoStatus GigeCamera::start() {
   }
   frame_ids_.reset();
   streaming_ = true;
+  next_probe_ = std::chrono::steady_clock::now() +
+                std::chrono::milliseconds(options_.liveness_probe_period_ms);
   return IoStatus::Ok();
 }
 
@@ -233,12 +276,17 @@ IoStatus GigeCamera::grab(CameraFrame& frame, std::chrono::milliseconds timeout)
   for (;;) {
     if (control_lost_.load())
       return IoStatus::Error(IoCode::kDisconnected, name_, "control lost (heartbeat)");
-    const auto left = std::chrono::duration_cast<std::chrono::microseconds>(
-        deadline - std::chrono::steady_clock::now());
+    if (IoStatus s = probe_if_due(); !s.ok()) return s;
+    const auto now = std::chrono::steady_clock::now();
+    const auto wake = probe_ != nullptr ? std::min(deadline, next_probe_) : deadline;
+    const auto left = std::chrono::duration_cast<std::chrono::microseconds>(wake - now);
     ArvBuffer* buffer = arv_stream_timeout_pop_buffer(
         stream_, static_cast<guint64>(std::max<int64_t>(0, left.count())));
-    if (buffer == nullptr)
-      return IoStatus::Error(IoCode::kTimeout, name_, "grab: no frame within timeout");
+    if (buffer == nullptr) {
+      if (std::chrono::steady_clock::now() >= deadline)
+        return IoStatus::Error(IoCode::kTimeout, name_, "grab: no frame within timeout");
+      continue;  // a probe is due before the deadline
+    }
     const HostTime received = host_time_now();
     IoStatus s = IoStatus::Ok();
     if (arv_buffer_get_status(buffer) != ARV_BUFFER_STATUS_SUCCESS) {
@@ -248,6 +296,9 @@ IoStatus GigeCamera::grab(CameraFrame& frame, std::chrono::milliseconds timeout)
       s = unpack_buffer(buffer, frame, received);
     }
     arv_stream_push_buffer(stream_, buffer);  // back to the pool before anything else
+    // Any buffer, complete or not, shows the device is there.
+    next_probe_ = std::chrono::steady_clock::now() +
+                  std::chrono::milliseconds(options_.liveness_probe_period_ms);
     if (s.ok()) return s;
     // Incomplete or malformed buffers are counted and skipped; wait for the next one.
   }

@@ -9,12 +9,16 @@
 // on Aravis' stream thread; grab() pops a filled buffer on the driver thread, copies/unpacks
 // it, and pushes the buffer back to the stream before returning, so the pool never drains. A
 // "control-lost" signal (heartbeat failure: cable pulled, camera power lost) only sets a flag
-// from Aravis' thread; grab() then reports kDisconnected and the driver reopens.
+// from Aravis' thread; grab() then reports kDisconnected and the driver reopens. The heartbeat
+// takes about 6 s to give up, so grab() also probes the control channel itself whenever no
+// frame has arrived for `liveness_probe_period_ms` (gvcp_probe.h): a camera that answers none
+// of its reads is reported kDisconnected within about a second.
 //
 // Threading: open()/start()/grab()/trigger()/stop() from one driver thread (see camera.h).
 
 #include <atomic>
 #include <chrono>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -25,6 +29,8 @@ struct _ArvStream;
 struct _ArvBuffer;
 
 namespace nav::drivers {
+
+class GvcpProbe;
 
 enum class TriggerMode {
   kFreeRun,   ///< camera runs at frame_rate_hz
@@ -60,6 +66,12 @@ struct GigeOptions {
   /// Width of the device frame counter: 16 for GigE Vision 1.x block ids (0 skipped on wrap),
   /// 64 for extended ids.
   int frame_id_bits = 16;
+  /// Without a frame for this long grab() reads a register of the device (one probe) to see
+  /// that it is still there; 0: no probe (only Aravis' heartbeat, ~6 s). [0, 60000] ms.
+  int liveness_probe_period_ms = 500;
+  /// A probe fails after this many unanswered reads of `liveness_probe_timeout_ms` each.
+  int liveness_probe_tries = 4;
+  int liveness_probe_timeout_ms = 250;  ///< [1, 10000]
 
   IoStatus validate() const;
 };
@@ -97,6 +109,10 @@ class GigeCamera final : public Camera {
   /// Unpacks a complete buffer on the driver thread; counts what it rejects.
   IoStatus unpack_buffer(_ArvBuffer* buffer, CameraFrame& frame, const HostTime& received);
   static void on_control_lost(void* device, void* self);
+  /// Makes the probe of a GigE Vision device after open() (none for other devices or when off).
+  void make_probe();
+  /// kDisconnected when a probe is due (no frame for the period) and the device does not answer.
+  IoStatus probe_if_due();
 
   GigeOptions options_;
   IoStatus options_status_;
@@ -114,6 +130,8 @@ class GigeCamera final : public Camera {
   int height_ = 0;
   FrameIdUnwrapper frame_ids_;
   CameraStats stats_;
+  std::unique_ptr<GvcpProbe> probe_;
+  std::chrono::steady_clock::time_point next_probe_ = std::chrono::steady_clock::time_point::max();
 };
 
 }  // namespace nav::drivers
