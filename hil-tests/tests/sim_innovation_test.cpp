@@ -158,9 +158,11 @@ TEST(SimInnovation, SensorNoisierThanItsConfigShowsALargeMeanNis) {
   ASSERT_TRUE(found) << "config/sim.yaml has no sensor 'depth'";
   const std::map<std::string, SensorNis> nis = replay_nis(config);
   ASSERT_TRUE(nis.count("depth"));
-  // Measured with the shipped config: depth 9.4 (0.92 with the right sigma); the heading
-  // sensor unaffected (1.34).
-  EXPECT_GT(nis.at("depth").mean, 5.0 * nis.at("depth").dim);
+  // Measured with the shipped config: depth 4.5 and 18 of 661 updates gated (0.75 with the
+  // right sigma); the heading sensor unaffected (1.52). The heave's process noise sets how much
+  // of a depth innovation the filter can explain by motion: with sim.yaml's earlier w PSD of
+  // 6e-3 the noisy sensor gave 9.4 (docs/consistency.md "Process noise").
+  EXPECT_GT(nis.at("depth").mean, 3.0 * nis.at("depth").dim);
   EXPECT_LT(nis.at("heading").mean, 1.5 * nis.at("heading").dim);
 }
 
