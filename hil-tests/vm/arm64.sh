@@ -93,6 +93,9 @@ EOF
 # console. Needs OUT_DIR/vmlinuz and first-initrd.img (arm64_first_initrd).
 arm64_second_stage() {
   local root=$1 out=$2 timeout_s=$3 disk=$2/stage2.img tarimg=$2/stage2.tar qemu deadline
+  # debootstrap --foreign in a container that cannot mount proc links /proc to the host's
+  # (/proc -> /proc): a loop once the root is the guest's own; the guest mounts a real one.
+  if [ -L "$root/proc" ]; then rm "$root/proc"; mkdir -m 0555 "$root/proc"; fi
   arm64_stage2_script > "$root/navd-vm-stage2"
   chmod 0755 "$root/navd-vm-stage2"
   mkfs.ext4 -q -F -L navd-vm -d "$root" "$disk" "$(( $(du -sm "$root" | cut -f1) + 1500 ))M"

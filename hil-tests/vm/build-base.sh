@@ -63,8 +63,12 @@ root="$out/root"
 echo "build-base.sh: debootstrap $suite ($arch) into $root" >&2
 start=$(date +%s)
 foreign=""; [ "$arch" = arm64 ] && foreign=--foreign
-debootstrap --arch="$arch" $foreign --variant=minbase --include="$include" "$suite" "$root" \
-  "$mirror" > "$out/debootstrap.log" 2>&1 || {
+# The downloaded packages are kept beside the bases (a rebuild after a script change fetches
+# only what changed).
+mkdir -p "$cache/debootstrap-debs"
+debootstrap --arch="$arch" $foreign --variant=minbase --include="$include" \
+  --cache-dir="$cache/debootstrap-debs" "$suite" "$root" "$mirror" \
+  > "$out/debootstrap.log" 2>&1 || {
   echo "build-base.sh: debootstrap failed, last lines of $out/debootstrap.log:" >&2
   tail -20 "$out/debootstrap.log" >&2; exit 1; }
 if [ "$arch" = arm64 ]; then
