@@ -43,10 +43,14 @@ done
 build=$(cd "$build" && pwd)
 cache=${cache:-${NAV_VM_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/navd-vm}}
 case "$arch" in
-  amd64) tools="qemu-system-x86_64"; target_bin=${target_bin:-$build/bin}
-         scenarios=${scenarios:-ready,stop,watchdog,hardening,config_error}; timeout_s=${timeout_s:-900} ;;
-  arm64) tools="qemu-system-aarch64 aarch64-linux-gnu-gcc cpio"; target_bin=${target_bin:-$src/build-arm64/bin}
-         scenarios=${scenarios:-ready,replay}; timeout_s=${timeout_s:-3600} ;;
+  amd64) tools="qemu-system-x86_64"
+         target_bin=${target_bin:-$build/bin}
+         scenarios=${scenarios:-ready,stop,watchdog,hardening,config_error}
+         timeout_s=${timeout_s:-900} ;;
+  arm64) tools="qemu-system-aarch64 aarch64-linux-gnu-gcc cpio"
+         target_bin=${target_bin:-$src/build-arm64/bin}
+         scenarios=${scenarios:-ready,replay}
+         timeout_s=${timeout_s:-3600} ;;
   *) echo "run-vm.sh: --arch '$arch': not amd64 or arm64" >&2; exit 2 ;;
 esac
 skip() { echo "run-vm.sh: SKIP: $*"; exit 77; }
@@ -54,14 +58,16 @@ skip() { echo "run-vm.sh: SKIP: $*"; exit 77; }
 for tool in $tools debootstrap mkfs.ext4 depmod; do
   command -v "$tool" > /dev/null || skip "$tool not installed (scripts/install-deps)"
 done
-for bin in "$build/bin/navtool" "$build/bin/navd_vm_tool" "$target_bin/navd" "$target_bin/navtool"; do
+for bin in "$build/bin/navtool" "$build/bin/navd_vm_tool" "$target_bin/navd" \
+           "$target_bin/navtool"; do
   [ -x "$bin" ] || { echo "run-vm.sh: $bin not built" >&2; exit 1; }
 done
 mkdir -p "$cache"
 t_start=$(date +%s.%N)
 secs() { awk -v a="$1" -v b="$(date +%s.%N)" 'BEGIN{printf "%.1f", b - a}'; }
 
-base=$("$src/hil-tests/vm/build-base.sh" --arch "$arch" "$cache" "$build/bin/navd" "$build/bin/navtool")
+base=$("$src/hil-tests/vm/build-base.sh" --arch "$arch" "$cache" "$build/bin/navd" \
+  "$build/bin/navtool")
 echo "run-vm.sh: base image $base ($(secs "$t_start") s)"
 
 work=$cache/run
@@ -104,8 +110,9 @@ else
   . "$src/hil-tests/vm/arm64.sh"
   # The virt board has one UART (the console): the verdicts go to a virtio console.
   arm64_qemu "$disk" -- -kernel "$base/vmlinuz" -initrd "$base/initrd.img" \
-    -append "root=/dev/vda rw console=ttyAMA0 panic=-1 navd_vm.scenarios=$scenarios navd_vm.results=/dev/hvc0" \
-    -serial "file:$console" -device virtio-serial-pci -chardev "file,id=results,path=$results" \
+    -append "root=/dev/vda rw console=ttyAMA0 panic=-1 navd_vm.scenarios=$scenarios \
+navd_vm.results=/dev/hvc0" -serial "file:$console" \
+    -device virtio-serial-pci -chardev "file,id=results,path=$results" \
     -device virtconsole,chardev=results &
 fi
 qemu=$!
