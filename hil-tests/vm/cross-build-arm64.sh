@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Cross-builds navd and navtool (Release) for the arm64 vehicle computer against an arm64
-# sysroot made of Debian 12 packages (hil-tests/vm/README.md "arm64"):
+# Cross-builds navd, navtool and navd_vm_tool (Release) for the arm64 vehicle computer against
+# an arm64 sysroot made of Debian 12 packages (hil-tests/vm/README.md "arm64"):
 #   hil-tests/vm/cross-build-arm64.sh [--sysroot DIR] [--build DIR]
 # --sysroot: default NAV_VM_CACHE or ~/.cache/navd-vm, /sysroot-arm64-<key>; --build: default
 # build-arm64 in the source tree. Prints the time of each step.
@@ -12,7 +12,8 @@
 #    the sysroot. Multiarch does not do here: LCM's and OpenCV's arm64 -dev packages conflict with
 #    the amd64 ones (docs/platform.md "Cross builds and emulation").
 # 2. cmake with toolchains/aarch64-linux-gnu.cmake and NAV_SYSROOT (tests, benchmarks off),
-#    ninja navd navtool. Host tools (lcm-gen, esbuild) run natively.
+#    ninja navd navtool navd_vm_tool (the VM scenarios' helper). Host tools (lcm-gen, esbuild)
+#    run natively.
 # Needs g++-aarch64-linux-gnu (installed here with apt-get when missing; root), dpkg-deb,
 # apt-get, cmake, ninja.
 set -euo pipefail
@@ -109,7 +110,9 @@ cmake -S "$src" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   tail -20 "$build/cross-cmake.log" >&2; exit 1; }
 echo "cross-build-arm64.sh: configured in $(secs "$t1") s" >&2
 t2=$(date +%s)
-ninja -C "$build" -j"${NAV_JOBS:-2}" navd navtool
-file "$build/bin/navd" "$build/bin/navtool" | grep -q "ARM aarch64" || {
-  echo "cross-build-arm64.sh: $build/bin/navd or navtool is not an aarch64 executable" >&2; exit 1; }
-echo "cross-build-arm64.sh: navd and navtool built in $(secs "$t2") s (total $(secs "$t0") s)" >&2
+ninja -C "$build" -j"${NAV_JOBS:-2}" navd navtool navd_vm_tool
+for bin in navd navtool navd_vm_tool; do
+  file "$build/bin/$bin" | grep -q "ARM aarch64" || {
+    echo "cross-build-arm64.sh: $build/bin/$bin is not an aarch64 executable" >&2; exit 1; }
+done
+echo "cross-build-arm64.sh: navd, navtool and navd_vm_tool built in $(secs "$t2") s (total $(secs "$t0") s)" >&2

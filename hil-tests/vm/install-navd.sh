@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # Installs navd into the VM's root filesystem the way README.md "Running on a vehicle" says,
 # plus the scenario runner (hil-tests/vm/README.md):
-#   install-navd.sh SOURCE_DIR BUILD_DIR ROOT
-# 1. navd and navtool from BUILD_DIR/bin to /usr/bin;
+#   install-navd.sh SOURCE_DIR BUILD_DIR ROOT [BIN_DIR]
+# BUILD_DIR: the host's build, whose navtool and navd_vm_tool make the dives and the config;
+# BIN_DIR: the guest's binaries (default BUILD_DIR/bin; for the arm64 guest the cross build's,
+# cross-build-arm64.sh).
+# 1. navd, navtool and navd_vm_tool from BIN_DIR to /usr/bin;
 # 2. systemd/navd.service, navd.sysusers, navd.tmpfiles to their places, then
 #    systemd-sysusers and systemd-tmpfiles --create (on the root, --root=);
 # 3. /etc/navd/navd.yaml: the config `navtool hil-play` writes for the VM's dive (serial
@@ -10,9 +13,9 @@
 #    every 2 s;
 # 4. navd is not enabled: each scenario starts it after the player (guest/lib.sh).
 set -euo pipefail
-src=$1; build=$2; root=$3
+src=$1; build=$2; root=$3; bin=${4:-$2/bin}
 vm=$src/hil-tests/vm
-install -m 0755 "$build/bin/navd" "$build/bin/navtool" "$root/usr/bin/"
+install -m 0755 "$bin/navd" "$bin/navtool" "$root/usr/bin/"
 # NAV_VM_UNIT: another unit file (the failure demonstrations of README.md)
 install -m 0644 "${NAV_VM_UNIT:-$src/systemd/navd.service}" "$root/lib/systemd/system/navd.service"
 install -D -m 0644 "$src/systemd/navd.sysusers" "$root/usr/lib/sysusers.d/navd.conf"
@@ -66,7 +69,15 @@ grep -q "signals_file: /etc/navd/can/dvl_fog_example.yaml" "$lib/can-dive/config
   echo "install-navd.sh: the CAN dive's config does not name the installed signal table" >&2
   exit 1; }
 rm -rf "$gen"
-install -m 0755 "$build/bin/navd_vm_tool" "$root/usr/bin/"
+# The replay scenario's dive: replayed by the guest's navtool and compared with the host's
+# replay of the same dive (run-vm.sh, compare-replay.sh).
+"$build/bin/navtool" simulate --config "$src/config/sim.yaml" --out "$lib/replay-dive" \
+  --images "${NAV_VM_REPLAY_IMAGES:-14}" --seed 7 > /dev/null
+if [ -x "$bin/navd_vm_tool" ]; then
+  install -m 0755 "$bin/navd_vm_tool" "$root/usr/bin/"
+else
+  echo "install-navd.sh: no $bin/navd_vm_tool: the watchdog and can scenarios cannot run" >&2
+fi
 
 install -m 0644 "$vm/guest/lib.sh" "$lib/lib.sh"
 install -m 0755 "$vm/guest/run-scenarios" "$vm/guest/sandbox-probe" "$lib/"
