@@ -7,6 +7,7 @@
 #include <arv.h>
 
 #include <algorithm>
+#include <system_error>
 
 #include "gvcp_probe.h"
 
@@ -116,9 +117,18 @@ void GigeCamera::make_probe() {
       !g_socket_address_to_native(address, &device, sizeof device, nullptr)) {
     return;  // not an IPv4 GVCP peer: the heartbeat alone watches it
   }
-  probe_ = std::make_unique<GvcpProbe>(
-      device, std::chrono::milliseconds(options_.liveness_probe_timeout_ms),
-      options_.liveness_probe_tries);
+  try {
+    probe_ = std::make_unique<GvcpProbe>(
+        device, std::chrono::milliseconds(options_.liveness_probe_timeout_ms),
+        options_.liveness_probe_tries);
+  } catch (const std::system_error&) {
+    // No socket for it (descriptors exhausted): the heartbeat alone watches the camera.
+  }
+}
+
+void GigeCamera::probe_later() {
+  next_probe_ = std::chrono::steady_clock::now() +
+                std::chrono::milliseconds(options_.liveness_probe_period_ms);
 }
 
 IoStatus GigeCamera::probe_if_due() {
@@ -129,8 +139,7 @@ IoStatus GigeCamera::probe_if_due() {
     control_silent_ = true;  // stop() must not wait out Aravis' retries on AcquisitionStop
     return IoStatus::Error(IoCode::kDisconnected, name_, "camera does not answer: " + why);
   }
-  next_probe_ = std::chrono::steady_clock::now() +
-                std::chrono::milliseconds(options_.liveness_probe_period_ms);
+  probe_later();
   return IoStatus::Ok();
 }
 
@@ -223,8 +232,7 @@ IoStatus GigeCamera::start() {
   }
   frame_ids_.reset();
   streaming_ = true;
-  next_probe_ = std::chrono::steady_clock::now() +
-                std::chrono::milliseconds(options_.liveness_probe_period_ms);
+  probe_later();
   return IoStatus::Ok();
 }
 
@@ -296,9 +304,7 @@ IoStatus GigeCamera::grab(CameraFrame& frame, std::chrono::milliseconds timeout)
       s = unpack_buffer(buffer, frame, received);
     }
     arv_stream_push_buffer(stream_, buffer);  // back to the pool before anything else
-    // Any buffer, complete or not, shows the device is there.
-    next_probe_ = std::chrono::steady_clock::now() +
-                  std::chrono::milliseconds(options_.liveness_probe_period_ms);
+    probe_later();  // any buffer, complete or not, shows the device is there
     if (s.ok()) return s;
     // Incomplete or malformed buffers are counted and skipped; wait for the next one.
   }

@@ -113,6 +113,8 @@ class GigeCamera final : public Camera {
   void make_probe();
   /// kDisconnected when a probe is due (no frame for the period) and the device does not answer.
   IoStatus probe_if_due();
+  /// The next probe one period from now (after a buffer, a probe or the start).
+  void probe_later();
 
   GigeOptions options_;
   IoStatus options_status_;
