@@ -1,42 +1,40 @@
 // Innovation gate of the robot updates (navigation/aid_gate.h).
 #include "nav/core/navigation/aid_gate.h"
 
-#include <Eigen/Cholesky>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 #include "nav/core/navigation/chi_square.h"
+#include "nav/core/navigation/innovation_stats.h"
 
 namespace nav::core {
 namespace {
 
 double sigma_of(const AidGateOptions& o, AidKind kind) {
   switch (kind) {
-    case AidKind::kDvl: return o.dvl_sigma;
-    case AidKind::kRollPitch: return o.roll_pitch_sigma;
-    case AidKind::kHeading: return o.heading_sigma;
-    case AidKind::kDepth: return o.depth_sigma;
+    case AidKind::kDvl:
+      return o.dvl_sigma;
+    case AidKind::kRollPitch:
+      return o.roll_pitch_sigma;
+    case AidKind::kHeading:
+      return o.heading_sigma;
+    case AidKind::kDepth:
+      return o.depth_sigma;
   }
   return 0.0;
-}
-
-/// νᵀ S⁻¹ ν by LLT; -1 when S is not positive definite or the result not finite.
-double nis_of(const MeasVec& nu, const MeasCov& S) {
-  const Eigen::LLT<MeasCov> llt(S);
-  if (llt.info() != Eigen::Success) return -1.0;
-  const double d2 = nu.dot(llt.solve(nu));
-  return std::isfinite(d2) ? d2 : -1.0;
 }
 
 }  // namespace
 
 void validate(const AidGateOptions& o) {
-  const char* names[] = {"dvl_sigma", "roll_pitch_sigma", "heading_sigma", "depth_sigma"};
-  const double values[] = {o.dvl_sigma, o.roll_pitch_sigma, o.heading_sigma, o.depth_sigma};
-  for (int k = 0; k < 4; ++k) {
-    if (!(values[k] >= 0.0 && values[k] <= 1000.0)) {
+  const char* names[kNumAidKinds] = {"dvl_sigma", "roll_pitch_sigma", "heading_sigma",
+                                     "depth_sigma"};  // in AidKind order
+  for (int k = 0; k < kNumAidKinds; ++k) {
+    const double sigma = sigma_of(o, static_cast<AidKind>(k));
+    if (!(sigma >= 0.0 && sigma <= 1000.0)) {
       throw std::invalid_argument(std::string("AidGateOptions: ") + names[k] + " = " +
-                                  std::to_string(values[k]) + " is not in [0, 1000]");
+                                  std::to_string(sigma) + " is not in [0, 1000]");
     }
   }
   if (!(o.reset_timeout_s >= 0.0 && o.reset_timeout_s <= 1e6)) {
@@ -107,7 +105,8 @@ AidGateDecision AidGate::decide(std::size_t sensor, AidKind kind, std::int64_t t
     return d;
   }
   // In a run: against the covariance it opened with (the file comment).
-  const double run_ratio = nis_of(nu, MeasCov(H * run.P * H.transpose() + R)) / gamma;
+  const std::optional<double> run_nis = nis_of(nu, MeasCov(H * run.P * H.transpose() + R));
+  const double run_ratio = run_nis ? *run_nis / gamma : -1.0;
   if (run_ratio >= 0.0 && run_ratio <= 1.0) {
     run.start_us = -1;
     d.test_ratio = run_ratio;

@@ -1,7 +1,17 @@
 // Per-sensor innovation records of NavFilter's robot updates (navigation/innovation_stats.h).
 #include "nav/core/navigation/innovation_stats.h"
 
+#include <Eigen/Cholesky>
+
 namespace nav::core {
+
+std::optional<double> nis_of(const MeasVec& nu, const MeasCov& S) {
+  const Eigen::LLT<MeasCov> llt(S);
+  if (llt.info() != Eigen::Success) return std::nullopt;
+  const double d2 = nu.dot(llt.solve(nu));
+  if (!std::isfinite(d2)) return std::nullopt;
+  return d2;
+}
 
 InnovationPeriod innovation_period(const SensorInnovation& now, const SensorInnovation* before) {
   InnovationPeriod p;
@@ -27,9 +37,9 @@ SensorInnovation& SensorInnovationStats::slot(const SensorModels& models, std::s
 }
 
 void SensorInnovationStats::record(const SensorModels& models, std::size_t sensor, const char* what,
-                                   std::int64_t t_us, const MeasVec& z,
-                                   const MeasCov& R, const InnovationSample& sample,
-                                   bool fused, bool reset, double gate_sigma) {
+                                   std::int64_t t_us, const MeasVec& z, const MeasCov& R,
+                                   const InnovationSample& sample, bool fused, bool reset,
+                                   double gate_sigma) {
   SensorInnovation& s = slot(models, sensor);
   const double g = gate_sigma > 0.0 ? gate_sigma : kTestRatioGateSigma;
   if (fused) {
@@ -64,8 +74,7 @@ void SensorInnovationStats::record(const SensorModels& models, std::size_t senso
     c.innovation = sample.nu.size() > row ? sample.nu(row) : 0.0;
     c.innovation_variance = sample.S.rows() > row ? sample.S(row, row) : 0.0;
     c.test_ratio = c.innovation_variance > 0.0
-                       ? c.innovation * c.innovation /
-                             (g * g * c.innovation_variance)
+                       ? c.innovation * c.innovation / (g * g * c.innovation_variance)
                        : 0.0;
     c.fused = fused;
   }
