@@ -37,12 +37,16 @@ int description_level(int width_px, int max_width_px) {
   return level;
 }
 
-/// Keypoints of image level L (pyrDown: level pixel x is full-resolution pixel 2^L x) in
-/// full-resolution pixels, sizes scaled alike.
-void to_full_resolution(std::vector<cv::KeyPoint>& keypoints, int level) {
+/// SIFT keypoints of image level L in full-resolution pixels, sizes scaled alike.
+/// OpenCV's SIFT (4.6) builds its first octave by upsampling 2x with bilinear interpolation,
+/// whose pixel j samples the input at j / 2 - 1/4, and reports keypoints at j / 2: every
+/// keypoint is 1/4 pixel of its input too far right and down (measured on blobs at known
+/// positions: features_test.cpp). The level's pixel x is full-resolution pixel 2^L x (pyrDown
+/// centres its kernel on the even pixels).
+void sift_to_full_resolution(std::vector<cv::KeyPoint>& keypoints, int level) {
   const float s = static_cast<float>(1 << level);
   for (auto& k : keypoints) {
-    k.pt *= s;
+    k.pt = (k.pt - cv::Point2f(0.25f, 0.25f)) * s;
     k.size *= s;
   }
 }
@@ -165,7 +169,7 @@ Status extract_features(const cv::Mat& image_8u, const CameraIntrinsics& camera,
     std::vector<cv::KeyPoint> sift_keypoints;
     cv::Mat sift_descriptors;
     sift->detectAndCompute(level_image, cv::noArray(), sift_keypoints, sift_descriptors);
-    to_full_resolution(sift_keypoints, level);
+    sift_to_full_resolution(sift_keypoints, level);
     if (!sift_keypoints.empty()) {
       keypoints.insert(keypoints.end(), sift_keypoints.begin(), sift_keypoints.end());
       detector.insert(detector.end(), sift_keypoints.size(), Detector::kSift);
