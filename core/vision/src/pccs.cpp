@@ -371,4 +371,14 @@ PutativeMatches match_pose_constrained(const ImageFeatures& i, const ImageFeatur
   return out;
 }
 
+SceneDepthPrior scene_depth_prior(double altitude_i_m, double altitude_j_m, double t_z_i_j_m,
+                                  double sigma_fraction, double sigma_floor_m) {
+  const double a = altitude_i_m, b = std::max(altitude_j_m + t_z_i_j_m, 0.0);
+  const double lo = std::min(a, b), hi = std::max(a, b);
+  SceneDepthPrior p;
+  p.depth_m = 0.5 * (lo + hi);
+  p.sigma_m = (hi - lo) / 6.0 + sigma_fraction * hi + sigma_floor_m;
+  return p;
+}
+
 }  // namespace nav::vision

@@ -305,5 +305,23 @@ TEST(Pccs, BadInputsThrowWithAMessage) {
   EXPECT_EQ(none.descriptor_comparisons, 0u);
 }
 
+// Over relief the shared scene lies between the floor below camera i and the floor below
+// camera j (seen from camera i): the prior's 3-sigma interval spans both, each with its own
+// margin; equal depths give the one-camera prior.
+TEST(Pccs, SceneDepthPriorSpansBothCamerasFloors) {
+  const SceneDepthPrior same = scene_depth_prior(4.0, 4.5, -0.5, 0.1, 0.5);
+  EXPECT_NEAR(same.depth_m, 4.0, 1e-12);
+  EXPECT_NEAR(same.sigma_m, 0.1 * 4.0 + 0.5, 1e-12);
+  // Camera i above a hull's edge sees mud 12 m down; camera j, 1 m higher, the deck 5 m below
+  // it: 4 m along camera i's axis.
+  const SceneDepthPrior edge = scene_depth_prior(12.0, 5.0, -1.0, 0.1, 0.5);
+  for (const double d : {4.0, 12.0}) {
+    const double sigma_d = 0.1 * d + 0.5;
+    EXPECT_LE(edge.depth_m - 3.0 * edge.sigma_m, d - 3.0 * sigma_d + 1e-9) << d;
+    EXPECT_GE(edge.depth_m + 3.0 * edge.sigma_m, d + 3.0 * sigma_d - 1e-9) << d;
+  }
+  EXPECT_LT(edge.depth_m - 3.0 * edge.sigma_m, 4.0);
+}
+
 }  // namespace
 }  // namespace nav::vision

@@ -75,9 +75,11 @@ std::optional<nav::vision::RelativePosePrior> pair_prior_from_filter(
   nav::vision::RelativePosePrior prior;
   prior.x_i_j = p.x_ci_cj;
   prior.covariance = p.covariance;
-  prior.scene_depth_m = image_i->altitude_m;
-  prior.scene_depth_sigma_m =
-      config.depth_sigma_fraction * image_i->altitude_m + config.depth_sigma_floor_m;
+  const nav::vision::SceneDepthPrior depth = nav::vision::scene_depth_prior(
+      image_i->altitude_m, images.back().altitude_m, p.x_ci_cj[2], config.depth_sigma_fraction,
+      config.depth_sigma_floor_m);
+  prior.scene_depth_m = depth.depth_m;
+  prior.scene_depth_sigma_m = depth.sigma_m;
   return prior;
 }
 

@@ -79,6 +79,21 @@ struct PccsGate {
 };
 PccsGate pccs_gate(double confidence);
 
+/// The scene-depth prior (mean and sigma along camera i's axis) of a pair over relief: the
+/// scene the two cameras share lies anywhere between the seafloor below camera i (altitude_i_m)
+/// and the seafloor below camera j seen from camera i (altitude_j_m + t_z_i_j_m, camera j's
+/// offset along camera i's axis), each known to sigma = sigma_fraction x altitude + sigma_floor_m.
+/// The result's mean +- 3 sigma spans both (a frame above a hull's edge and one above its deck
+/// share the deck, which the altitude below the first misses by metres); equal depths give the
+/// single-camera prior. The registration code of Eustice et al. bounds its scene depth by both
+/// images' altitudes likewise.
+struct SceneDepthPrior {
+  double depth_m = 0.0;
+  double sigma_m = 0.0;
+};
+SceneDepthPrior scene_depth_prior(double altitude_i_m, double altitude_j_m, double t_z_i_j_m,
+                                  double sigma_fraction, double sigma_floor_m);
+
 /// The search region of feature u_i_px (undistorted pixels of image i) in image j.
 /// Throws std::invalid_argument for a non-positive depth prior or focal length, or
 /// depth_samples < 1.

@@ -19,6 +19,7 @@
 #include "nav/core/geometry/types.h"
 #include "nav/core/navigation/nav_filter.h"
 #include "nav/daemon/config/vision_config.h"
+#include "nav/vision/pccs.h"
 #include "nav/vision/vision_types.h"
 
 namespace nav::daemon::vision {
@@ -37,7 +38,8 @@ CameraPairPrior camera_pair_prior(const core::Vec6& x_world_body_i,
 
 /// The prior of a pair the filter has just deferred at image j (call right after the image's
 /// measurement: the robot is image j and the proposal joint is rebuilt from the same bounds and
-/// recovery the proposer used). Scene depth: image i's altitude, sigma from `config`.
+/// recovery the proposer used). Scene depth: between image i's and image j's altitude
+/// (nav/vision/pccs.h scene_depth_prior), sigma from `config`.
 /// nullopt and `why` set when the pair cannot be rebuilt (image i no longer a delayed state,
 /// robot not at image j, bounds refused it).
 std::optional<nav::vision::RelativePosePrior> pair_prior_from_filter(
