@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <limits>
 #include <random>
 
 #include "nav/core/geometry/pose.h"
@@ -35,18 +36,27 @@ double Renderer::value_noise(double x, double y, std::uint64_t s) const {
   return (1 - ay) * ((1 - ax) * a + ax * b) + ay * ((1 - ax) * c + ax * d);
 }
 
-double Renderer::albedo(double x_m, double y_m, double relief_m) const {
+double Renderer::albedo(double x_m, double y_m, double relief_m, double footprint_m) const {
   // Sediment grain (2 cm), pebbles (6 cm), ripples and patches (15 cm, 0.5 m, 1.2 m): texture
   // at every scale from a few pixels to the footprint; relief tops (debris, rust) are brighter,
-  // as on the wreck.
-  const double fine = value_noise(x_m / 0.02, y_m / 0.02, seed_ + 1);
-  const double pebble = value_noise(x_m / 0.06, y_m / 0.06, seed_ + 4);
-  const double mid = value_noise(x_m / 0.15, y_m / 0.15, seed_ + 2);
-  const double patch = value_noise(x_m / 0.5, y_m / 0.5, seed_ + 5);
-  const double coarse = value_noise(x_m / 1.2, y_m / 1.2, seed_ + 3);
-  const double relief = std::clamp(relief_m / 3.0, 0.0, 1.0);
-  const double a = 0.35 + 0.1 * (fine - 0.5) + 0.1 * (pebble - 0.5) + 0.16 * (mid - 0.5) +
-                   0.12 * (patch - 0.5) + 0.2 * (coarse - 0.5) + 0.2 * relief;
+  // as on the wreck. Each octave is faded to its mean where its lattice spacing L approaches
+  // the pixel's footprint p (weight smoothstep(L / p - 1) : full at L >= 2p, none at L <= p):
+  // frequency clamping (Ebert et al., "Texturing and Modeling", 3rd ed., ch. 2), the box
+  // filter of the pixel's area that a camera applies and a point sample does not; without it
+  // the 2 cm octave aliases beyond ~8 m range into a moire that moves unlike the seafloor.
+  struct Octave {
+    double lattice_m, weight;
+    std::uint64_t seed;
+  };
+  static constexpr Octave kOctaves[] = {
+      {0.02, 0.1, 1}, {0.06, 0.1, 4}, {0.15, 0.16, 2}, {0.5, 0.12, 5}, {1.2, 0.2, 3}};
+  double a = 0.35 + 0.2 * std::clamp(relief_m / 3.0, 0.0, 1.0);
+  for (const Octave& o : kOctaves) {
+    const double keep =
+        footprint_m > 0.0 ? smooth(std::clamp(o.lattice_m / footprint_m - 1.0, 0.0, 1.0)) : 1.0;
+    if (keep > 0.0)
+      a += keep * o.weight * (value_noise(x_m / o.lattice_m, y_m / o.lattice_m, seed_ + o.seed) - 0.5);
+  }
   return std::clamp(a, 0.05, 1.0);
 }
 
@@ -167,6 +177,18 @@ core::Vec3 Renderer::surface_point(const core::Vec3& p_world, const core::Vec3& 
   return p_world + first_hit(p_world, d_world, top_map(p_world)) * d_world;
 }
 
+std::vector<core::Vec3> Renderer::surface_points(const core::Vec3& p_world,
+                                                 const std::vector<core::Vec3>& d_world) const {
+  const TopMap top = top_map(p_world);
+  std::vector<core::Vec3> out;
+  out.reserve(d_world.size());
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  for (const core::Vec3& d : d_world)  // a ray near or above the horizon meets nothing
+    out.push_back(d.z() > 0.05 ? core::Vec3(p_world + first_hit(p_world, d, top) * d)
+                               : core::Vec3(kNaN, kNaN, kNaN));
+  return out;
+}
+
 cv::Mat Renderer::render(const core::Vec12& x, std::uint64_t frame_seed, double* gain_db) const {
   const core::Vec6 x_wc = core::head_to_tail(x.head<6>(), camera_.x_body_camera);
   const core::Mat3 R = core::rotation_from_euler(x_wc.tail<3>());
@@ -187,8 +209,10 @@ cv::Mat Renderer::render(const core::Vec12& x, std::uint64_t frame_seed, double*
   for (int v = 0; v < h; ++v) {
     auto* row = radiance.ptr<float>(v);
     for (int u = 0; u < w; ++u) {
-      const core::Vec3 ray_cam((u + 0.5 - camera_.cx_px) / camera_.fx_px,
-                               (v + 0.5 - camera_.cy_px) / camera_.fy_px, 1.0);
+      // Pixel u's centre is at u (the pinhole model's convention: u = fx X / Z + cx).
+      // Pixel u's centre is at u (the pinhole model's convention: u = fx X / Z + cx).
+      const core::Vec3 ray_cam((u - camera_.cx_px) / camera_.fx_px,
+                               (v - camera_.cy_px) / camera_.fy_px, 1.0);
       const core::Vec3 d = R * ray_cam;
       if (d.z() <= 0.05) continue;
       const double t = first_hit(p_cam, d, top);
@@ -202,8 +226,11 @@ cv::Mat Renderer::render(const core::Vec12& x, std::uint64_t frame_seed, double*
       const double r_strobe = to_strobe.norm(), r_cam = t * d.norm();
       const double lambert = std::max(0.0, n.dot(to_strobe) / r_strobe);
       const double cos_axis = 1.0 / ray_cam.norm();
+      // The pixel's footprint on the surface: range / focal length, stretched by the incidence.
+      const double footprint_m =
+          r_cam / (camera_.fx_px * std::max(0.2, std::abs(n.dot(d)) / d.norm()));
       const double cos2 = cos_axis * cos_axis;
-      row[u] += static_cast<float>(albedo(q.x(), q.y(), seafloor_->relief_height_m(q.x(), q.y())) *
+      row[u] += static_cast<float>(albedo(q.x(), q.y(), seafloor_->relief_height_m(q.x(), q.y()), footprint_m) *
                                    lambert /
                                    (r_strobe * r_strobe) *
                                    std::exp(-options_.attenuation_per_m * (r_strobe + r_cam)) *

@@ -36,11 +36,16 @@ class Renderer {
   /// exposure's gain relative to a floor 1 m below the camera goes to *gain_db.
   cv::Mat render(const core::Vec12& x, std::uint64_t frame_seed, double* gain_db = nullptr) const;
   /// Albedo of the seafloor at world x, y standing `relief_m` above the flat seafloor
-  /// (Seafloor::relief_height_m): a property of the point, the same from every camera.
-  double albedo(double x_m, double y_m, double relief_m) const;
+  /// (Seafloor::relief_height_m), averaged over a pixel footprint of footprint_m (0: the
+  /// point's own): a property of the point and the pixel's size, not of the camera's pose.
+  double albedo(double x_m, double y_m, double relief_m, double footprint_m = 0.0) const;
   /// The first point of the ray p_world + t d_world (t > 0, d_world.z > 0: looking down) on the
   /// height field, as render() finds each pixel's (world NED, m).
   core::Vec3 surface_point(const core::Vec3& p_world, const core::Vec3& d_world) const;
+  /// surface_point of each ray from one camera position (one bound map for all); NaN for a
+  /// ray with d.z <= 0.05 (near or above the horizon).
+  std::vector<core::Vec3> surface_points(const core::Vec3& p_world,
+                                         const std::vector<core::Vec3>& d_world) const;
   /// 8-bit thumbnail (width thumbnail_width_px, aspect kept) of a 12-bit frame.
   cv::Mat thumbnail(const cv::Mat& frame) const;
 
