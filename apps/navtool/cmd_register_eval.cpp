@@ -1,8 +1,9 @@
 // navtool register-eval: registers the rendered frames of a simulated dive (`navtool simulate
-// --render-images`) against the truth: every pair of the first --frames frames whose true
-// footprints overlap by at least --min-overlap, with a prior from the truth plus a stated
+// --render-images`) against the truth: every pair of the first --frames frames that see at least
+// --min-overlap of the same surface (nav/sim/visible_footprint.h; --flat-overlap: of the flat
+// footprints at the depth below each camera), with a prior from the truth plus a stated
 // covariance (register_eval.h), multi-threaded over frames and pairs.
-//   navtool register-eval DIVE [--frames N] [--min-overlap F] [--threads T] [--json]
+//   navtool register-eval DIVE [--frames N] [--min-overlap F] [--flat-overlap] [--threads T] [--json]
 //                          [--draw OUT.png] [--draw-scale S]
 // --json prints one object: frames, pairs, successes, success_fraction,
 // median_rotation_error_deg, median_baseline_direction_error_deg, nees_mean, nees_median,
@@ -37,6 +38,7 @@
 #include "nav/sim/mission.h"
 #include "nav/sim/oracle.h"
 #include "nav/sim/seafloor.h"
+#include "nav/sim/visible_footprint.h"
 #include "nav/sim/sensor_streams.h"
 #include "nav/vision/draw.h"
 #include "nav/vision/validation.h"
@@ -54,6 +56,7 @@ struct EvalArgs {
   std::string dive, draw_path;
   int frames = 320;
   double min_overlap = 0.3;
+  bool flat_overlap = false;
   int threads = 2;
   double draw_scale = 0.5;
   int fig4_every = 1;
@@ -66,7 +69,8 @@ struct Frame {
   std::int64_t id = 0;
   vision::Vec6 x_world_camera = vision::Vec6::Zero();
   double floor_depth_m = 0.0;
-  sim::Polygon2 footprint;
+  sim::Polygon2 footprint;         ///< flat: on the plane at the depth below the camera
+  sim::VisibleFootprint visible;   ///< cast onto the 3-D scene
   fs::path image;
 };
 
@@ -151,6 +155,7 @@ Dive read_dive(const EvalArgs& args) {
                         : cam->camera.pixel_format == daemon::PixelFormat::kMono12 ? 12
                                                                                    : 8;
   const std::unique_ptr<sim::Seafloor> seafloor = rebuild_seafloor(dir);
+  const sim::Renderer renderer(dive.geometry, *seafloor, {}, 0);  // its ray casting only
   std::ifstream csv(dir / "images.csv");
   if (!csv) throw CommandError("register-eval: cannot read " + (dir / "images.csv").string());
   std::string line;
@@ -171,6 +176,7 @@ Dive read_dive(const EvalArgs& args) {
       throw CommandError("register-eval: the seafloor rebuilt from sim.json does not match the "
                          "altitude of frame " + std::to_string(f.id) + " in images.csv");
     f.footprint = sim::image_footprint(dive.geometry, x, f.floor_depth_m);
+    f.visible = sim::visible_footprint(renderer, dive.geometry, f.x_world_camera);
     char name[32];
     std::snprintf(name, sizeof name, "images/%06lld.png", static_cast<long long>(f.id));
     f.image = dir / name;
@@ -187,19 +193,24 @@ cv::Mat read_frame(const Frame& f) {
   return m;
 }
 
-std::vector<PairTruth> overlapping_pairs(const Dive& dive, double min_overlap) {
+std::vector<PairTruth> overlapping_pairs(const Dive& dive, double min_overlap, bool flat) {
   std::vector<PairTruth> pairs;
   for (std::size_t j = 1; j < dive.frames.size(); ++j) {
     for (std::size_t i = 0; i < j; ++i) {
       const Frame &a = dive.frames[i], &b = dive.frames[j];
-      if (a.footprint.empty() || b.footprint.empty()) continue;
-      if (sim::RegistrationOracle::overlap_fraction(a.footprint, b.footprint) < min_overlap)
-        continue;
+      const double overlap =
+          flat ? (a.footprint.empty() || b.footprint.empty()
+                      ? 0.0
+                      : sim::RegistrationOracle::overlap_fraction(a.footprint, b.footprint))
+               : sim::visible_overlap(a.visible, b.visible, dive.geometry);
+      if (overlap < min_overlap) continue;
       PairTruth t;
       t.i = static_cast<int>(i);
       t.j = static_cast<int>(j);
       t.x_i_j = core::tail_to_tail(a.x_world_camera, b.x_world_camera);
       t.scene_depth_m = a.floor_depth_m - a.x_world_camera[2];
+      t.scene_depth_j_m = b.floor_depth_m - b.x_world_camera[2];
+      t.overlap = overlap;
       pairs.push_back(t);
     }
   }
@@ -237,6 +248,7 @@ json summarise(const EvalArgs& args, const Dive& dive, const std::vector<PairTru
       {"dive", args.dive},
       {"frames", dive.frames.size()},
       {"min_overlap", args.min_overlap},
+      {"overlap", args.flat_overlap ? "flat" : "visible"},
       {"pairs", pairs.size()},
       {"successes", nees.size()},
       {"success_fraction", pairs.empty() ? 0.0 : n_ok / static_cast<double>(pairs.size())},
@@ -328,7 +340,7 @@ void run_register_eval(const EvalArgs& args) {
   for (const auto& e : errors)
     if (!e.empty()) throw CommandError("register-eval: " + e);
 
-  const std::vector<PairTruth> pairs = overlapping_pairs(dive, args.min_overlap);
+  const std::vector<PairTruth> pairs = overlapping_pairs(dive, args.min_overlap, args.flat_overlap);
   std::vector<PairEval> evals(pairs.size());
   std::vector<double> pair_cpu_ms(pairs.size());
   parallel_for(static_cast<int>(pairs.size()), args.threads, [&](int k) {
@@ -345,12 +357,12 @@ void run_register_eval(const EvalArgs& args) {
     for (std::size_t k = 0; k < pairs.size(); ++k) {
       const PairEval& e = evals[k];
       std::fprintf(stderr,
-                   "pair %lld-%lld: %s inliers %d/%d true %d rotation %.3f deg baseline %.2f deg NEES %.1f "
-                   "rms %.2f px sigma %.2f px area %.3f truths %d missed %d/%d/%d %s\n",
+                   "pair %lld-%lld (overlap %.2f): %s inliers %d/%d true %d (%.2f px) rotation %.3f deg baseline %.2f deg NEES %.1f "
+                   "rms %.2f px [from truth rms %.3f rot %.3f] sigma %.2f px area %.3f truths %d missed %d/%d/%d %s\n",
                    static_cast<long long>(dive.frames[static_cast<std::size_t>(pairs[k].i)].id),
                    static_cast<long long>(dive.frames[static_cast<std::size_t>(pairs[k].j)].id),
-                   e.result.success ? "ok" : "FAILED", e.result.inliers, e.result.putative_matches, e.inliers_true,
-                   e.rotation_error_deg, e.baseline_error_deg, e.nees, e.result.reprojection_rms_px, e.residual_sigma_px, e.inlier_area_fraction,
+                   pairs[k].overlap, e.result.success ? "ok" : "FAILED", e.result.inliers, e.result.putative_matches, e.inliers_true, e.inliers_true_rms_px,
+                   e.rotation_error_deg, e.baseline_error_deg, e.nees, e.result.reprojection_rms_px, e.truth_start_rms_px, e.truth_start_rotation_deg, e.residual_sigma_px, e.inlier_area_fraction,
                    e.true_correspondences, e.missed[0], e.missed[1], e.missed[2], e.result.reason.c_str());
     }
   }
@@ -385,6 +397,9 @@ void add_register_eval(CLI::App& app) {
   cmd->add_option("--min-overlap", args->min_overlap,
                   "smallest true footprint overlap of a pair (default 0.3)")
       ->check(CLI::Range(0.0, 1.0));
+  cmd->add_flag("--flat-overlap", args->flat_overlap,
+                "overlap of the flat footprints at the depth below each camera instead of the "
+                "surface both frames see (nav/sim/visible_footprint.h)");
   cmd->add_option("--threads", args->threads, "worker threads (default 2)")
       ->check(CLI::Range(1, 64));
   cmd->add_option("--prior-sigma-m", args->pair.prior_position_sigma_m,

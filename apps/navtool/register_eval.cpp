@@ -83,8 +83,11 @@ vision::RelativePosePrior make_prior(const PairTruth& truth, const PairEvalOptio
   for (int k = 0; k < 6; ++k) n[k] = normal(rng);
   const Mat6 L = prior.covariance.llt().matrixL();
   prior.x_i_j = truth.x_i_j + L * n;
-  prior.scene_depth_m = truth.scene_depth_m;
-  prior.scene_depth_sigma_m = o.depth_sigma_fixed_m + o.depth_sigma_fraction * truth.scene_depth_m;
+  const vision::SceneDepthPrior depth =
+      vision::scene_depth_prior(truth.scene_depth_m, truth.scene_depth_j_m, prior.x_i_j[2],
+                                o.depth_sigma_fraction, o.depth_sigma_fixed_m);
+  prior.scene_depth_m = depth.depth_m;
+  prior.scene_depth_sigma_m = depth.sigma_m;
   return prior;
 }
 
@@ -100,12 +103,33 @@ PairEval evaluate_pair(const vision::Registration& registration, const vision::I
   e.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   e.residual_sigma_px = d.refinement.residual_sigma_px;
   e.inlier_area_fraction = d.refinement.inlier_area_fraction;
+  double sum_sq = 0.0;
   for (const int k : d.refinement.used_matches) {
     const vision::Match& m = d.matches.matches[static_cast<std::size_t>(k)];
-    if (true_reprojection_error_px(fi.points_px[static_cast<std::size_t>(m.index_i)],
-                                   fj.points_px[static_cast<std::size_t>(m.index_j)],
-                                   registration.camera(), truth.x_i_j) <= o.max_true_error_px)
-      ++e.inliers_true;
+    const double r = true_reprojection_error_px(fi.points_px[static_cast<std::size_t>(m.index_i)],
+                                                fj.points_px[static_cast<std::size_t>(m.index_j)],
+                                                registration.camera(), truth.x_i_j);
+    if (r > o.max_true_error_px) continue;
+    ++e.inliers_true;
+    sum_sq += r * r;
+  }
+  if (e.inliers_true > 0) e.inliers_true_rms_px = std::sqrt(sum_sq / e.inliers_true);
+  if (e.result.success) {
+    std::vector<Eigen::Vector2d> ui, uj;
+    for (const int k : d.refinement.used_matches) {
+      const vision::Match& m = d.matches.matches[static_cast<std::size_t>(k)];
+      ui.push_back(fi.points_px[static_cast<std::size_t>(m.index_i)]);
+      uj.push_back(fj.points_px[static_cast<std::size_t>(m.index_j)]);
+    }
+    const auto r = vision::refine_two_view(ui, uj, registration.camera(),
+                                           core::rotation_from_euler(truth.x_i_j.tail<3>()),
+                                           truth.x_i_j.head<3>(), registration.options().refinement);
+    if (r.converged) {
+      e.truth_start_rms_px = r.reprojection_rms_px;
+      const Vec5 zt = vision::z_from_relative_pose(truth.x_i_j);
+      e.truth_start_rotation_deg = Eigen::AngleAxisd(vision::rotation_from_z(r.z).transpose() *
+                                                     vision::rotation_from_z(zt)).angle() * kDeg;
+    }
   }
   const Vec5 z_true = vision::z_from_relative_pose(truth.x_i_j);
   if (e.result.success) {

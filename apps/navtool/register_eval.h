@@ -4,8 +4,9 @@
 //
 // Per pair (i, j) of frames whose true footprints overlap:
 //   prior: the true relative pose of camera j in camera i plus a draw from the stated 6x6
-//          covariance P (so the prior is exactly consistent with P), the scene depth of the
-//          seafloor below camera i (the dive's height field) with a stated sigma;
+//          covariance P (so the prior is exactly consistent with P), the scene depth between
+//          the seafloor below camera i and below camera j (the dive's height field,
+//          pccs.h scene_depth_prior) with a stated sigma;
 //   registration (nav_vision, pose-constrained search with that prior);
 //   errors against the true 5-DOF measurement z_true: rotation angle, baseline direction
 //   angle, NEES = (z - z_true)^T C^-1 (z - z_true) with C the registration's covariance;
@@ -37,6 +38,8 @@ struct PairTruth {
   int i = 0, j = 0;                        ///< frame indices
   vision::Vec6 x_i_j = vision::Vec6::Zero();  ///< true pose of camera j in camera i
   double scene_depth_m = 0.0;              ///< depth of the floor below camera i, m
+  double scene_depth_j_m = 0.0;            ///< depth of the floor below camera j, m
+  double overlap = 0.0;                    ///< common surface, fraction of the smaller view
 };
 
 struct PairEval {
@@ -50,6 +53,8 @@ struct PairEval {
   /// Refinement inliers that the true pose confirms (as a true correspondence): few of
   /// result.inliers means wrong matches, all of them with a wrong z means the estimation.
   int inliers_true = 0;
+  double inliers_true_rms_px = 0.0;
+  double truth_start_rms_px = -1.0, truth_start_rotation_deg = -1.0;  ///< refinement from the truth  ///< RMS of the confirmed inliers' true-pose error in image j
   double residual_sigma_px = 0.0;  ///< the refinement's a-posteriori pixel noise
   double inlier_area_fraction = 0.0;  ///< the refinement's inlier spread in image i
 };

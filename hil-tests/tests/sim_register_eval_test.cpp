@@ -1,5 +1,6 @@
 // navtool register-eval on a tiny rendered dive (12 frames, its first pairs over the wreck):
-// the command runs end to end, reports every key, registers most overlapping pairs, and its
+// the command runs end to end, reports every key, registers most overlapping pairs (by flat
+// footprints and by the surface both frames see), and its
 // Fig. 4 counts show the PCCS band of the exact prior keeping the true correspondences that an
 // over-confident prior (covariance / 10) loses. The full-survey numbers are in
 // docs/performance.md ("Image registration"), from the same command on >= 300 frames.
@@ -20,10 +21,13 @@ TEST(SimRegisterEval, TinyRenderedDiveRegistersAndPccsBandHoldsTheTrueCorrespond
   const tool::test::NavtoolOutput sim = tool::test::run_navtool(
       "simulate --out '" + dir.string() + "' --images 12 --render-images");
   ASSERT_EQ(sim.exit_code, 0) << sim.err;
-  const tool::test::NavtoolOutput r =
-      tool::test::run_navtool("register-eval '" + dir.string() + "' --json --threads 2");
+  // Pairs by their flat footprints (13 on this dive): over the wreck's edges that includes
+  // pairs that share little surface, which the over-confident band misses.
+  const tool::test::NavtoolOutput r = tool::test::run_navtool(
+      "register-eval '" + dir.string() + "' --json --threads 2 --flat-overlap");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["overlap"], "flat");
   for (const char* key : {"pairs", "successes", "success_fraction", "median_rotation_error_deg",
                           "median_baseline_direction_error_deg", "nees_mean", "wrong",
                           "wrong_fraction", "fig4", "timing", "prior"})
@@ -40,6 +44,17 @@ TEST(SimRegisterEval, TinyRenderedDiveRegistersAndPccsBandHoldsTheTrueCorrespond
   EXPECT_LE(100 * exact, truths) << "the exact band misses at most 1 %: " << r.out;
   EXPECT_LE(f["missed_bound"].get<long long>(), exact) << r.out;
   EXPECT_GT(f["missed_overconfident"].get<long long>(), 10 * std::max(1LL, exact)) << r.out;
+
+  // The default pairs: those that see the same surface within range (nav/sim/visible_footprint.h),
+  // fewer than the flat footprints claim here, and registered.
+  const tool::test::NavtoolOutput v =
+      tool::test::run_navtool("register-eval '" + dir.string() + "' --json --threads 2");
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  const nlohmann::json jv = nlohmann::json::parse(v.out);
+  EXPECT_EQ(jv["overlap"], "visible");
+  EXPECT_GE(jv["pairs"].get<int>(), 3) << v.out;
+  EXPECT_LT(jv["pairs"].get<int>(), pairs) << v.out;
+  EXPECT_GE(2 * jv["successes"].get<int>(), jv["pairs"].get<int>()) << v.out;
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
 // --render-images: 16-bit PNG frames with 12 significant bits beside the log, referenced by
 // NAV_IMAGE with an 8-bit thumbnail; the renderer is deterministic, textured, and strobe-lit
-// (brighter in the middle than in the corners over a flat floor).
+// (brighter in the middle than in the corners over a flat floor); its texture is filtered by
+// the pixel's footprint; two frames' visible overlap over a flat floor is their flat footprints'
+// overlap, and none beyond the camera's range.
 #include <gtest/gtest.h>
 
 #include <opencv2/imgcodecs.hpp>
@@ -8,6 +10,7 @@
 #include <variant>
 
 #include "nav/sim/renderer.h"
+#include "nav/sim/visible_footprint.h"
 #include "support/sim_dive.h"
 
 namespace nav::sim::test {
@@ -97,6 +100,57 @@ TEST(SimRender, RaysMeetTheHullWallsWhereAFineMarchDoes) {
   }
   EXPECT_GT(walls, 20) << "rays that meet the wall itself";
   EXPECT_LE(grazing, 6) << "of 600 rays farther than 3 cm from the fine march's hit";
+}
+
+TEST(SimRender, TextureIsFilteredByThePixelFootprint) {
+  const Seafloor floor({-20.0, 20.0, -20.0, 20.0}, 0.0, 200.0, {}, 1);
+  const Renderer r(CameraGeometry{}, floor, RenderOptions{}, 3);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> at(-10.0, 10.0);
+  const auto stats = [&](double footprint_m) {
+    double sum = 0.0, sum2 = 0.0;
+    constexpr int kN = 4000;
+    for (int k = 0; k < kN; ++k) {
+      const double a = r.albedo(at(rng), at(rng), 0.0, footprint_m);
+      sum += a;
+      sum2 += a * a;
+    }
+    return std::pair{sum / kN, sum2 / kN - (sum / kN) * (sum / kN)};
+  };
+  const auto [mean_point, var_point] = stats(0.0);
+  const auto [mean_cm, var_cm] = stats(0.02);    // the 2 cm grain fades out
+  const auto [mean_far, var_far] = stats(10.0);  // every octave is below the pixel
+  EXPECT_LT(var_cm, var_point);
+  EXPECT_GT(var_cm, 0.5 * var_point);  // the coarser octaves stay
+  EXPECT_NEAR(mean_cm, mean_point, 0.01);
+  EXPECT_NEAR(mean_far, 0.35, 1e-12);  // the octaves' mean, no relief
+  EXPECT_LT(var_far, 1e-12);
+}
+
+TEST(SimRender, VisibleOverlapOfAFlatFloorIsTheFootprintOverlapWithinRange) {
+  const Seafloor floor({-30.0, 30.0, -30.0, 30.0}, 0.0, 300.0, {}, 1);  // no wreck near
+  CameraGeometry cam;
+  cam.fx_px = cam.fy_px = 1000.0;
+  cam.cx_px = 640.0;
+  cam.cy_px = 512.0;
+  const Renderer renderer(cam, floor, RenderOptions{}, 1);
+  for (const double altitude_m : {4.0, 10.0}) {
+    core::Vec12 a = core::Vec12::Zero(), b = core::Vec12::Zero();
+    a[2] = b[2] = floor.depth_m(0.0, 0.0) - altitude_m;
+    b[0] = 0.3 * altitude_m;  // along the image's 0.82 x altitude rows: ~63 % overlap
+    const auto fa = visible_footprint(renderer, cam, a.head<6>());
+    const auto fb = visible_footprint(renderer, cam, b.head<6>());
+    const double visible = visible_overlap(fa, fb, cam);
+    const double flat = RegistrationOracle::overlap_fraction(
+        image_footprint(cam, a, floor.depth_m(0.0, 0.0)), image_footprint(cam, b, floor.depth_m(0.0, 0.0)));
+    SCOPED_TRACE(altitude_m);
+    if (altitude_m < VisibleFootprintOptions{}.max_range_m) {
+      EXPECT_GT(flat, 0.5);
+      EXPECT_NEAR(visible, flat, 0.05);
+    } else {
+      EXPECT_EQ(visible, 0.0) << "the floor is beyond the camera's range";
+    }
+  }
 }
 
 }  // namespace
