@@ -53,12 +53,18 @@ TEST(SimRender, DiveWritesPngFramesAndThumbnails) {
   EXPECT_EQ(images, 3);
 }
 
+/// A camera of focal length f looking straight down (no mount), principal point centred.
+CameraGeometry pinhole(double f_px, int width_px, int height_px) {
+  CameraGeometry cam;
+  cam.fx_px = cam.fy_px = f_px;
+  cam.cx_px = 0.5 * width_px;
+  cam.cy_px = 0.5 * height_px;
+  return cam;
+}
+
 TEST(SimRender, RendererIsDeterministicAndStrobeLit) {
   const Seafloor floor({-20.0, 20.0, -20.0, 20.0}, 0.0, 200.0, {}, 1);  // wreck far away
-  CameraGeometry cam;
-  cam.fx_px = cam.fy_px = 100.0;
-  cam.cx_px = 80.0;
-  cam.cy_px = 64.0;
+  const CameraGeometry cam = pinhole(100.0, 160, 128);
   RenderOptions ro;
   ro.strobe_in_camera_m = core::Vec3::Zero();  // on the optical centre: symmetric light
   const Renderer a(cam, floor, ro, 7), b(cam, floor, ro, 7), c(cam, floor, ro, 8);
@@ -129,10 +135,7 @@ TEST(SimRender, TextureIsFilteredByThePixelFootprint) {
 
 TEST(SimRender, VisibleOverlapOfAFlatFloorIsTheFootprintOverlapWithinRange) {
   const Seafloor floor({-30.0, 30.0, -30.0, 30.0}, 0.0, 300.0, {}, 1);  // no wreck near
-  CameraGeometry cam;
-  cam.fx_px = cam.fy_px = 1000.0;
-  cam.cx_px = 640.0;
-  cam.cy_px = 512.0;
+  const CameraGeometry cam = pinhole(1000.0, 1280, 1024);  // the survey's camera
   const Renderer renderer(cam, floor, RenderOptions{}, 1);
   for (const double altitude_m : {4.0, 10.0}) {
     core::Vec12 a = core::Vec12::Zero(), b = core::Vec12::Zero();
