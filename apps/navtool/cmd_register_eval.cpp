@@ -3,9 +3,11 @@
 // --min-overlap of the same surface (nav/sim/visible_footprint.h; --flat-overlap: of the flat
 // footprints at the depth below each camera), with a prior from the truth plus a stated
 // covariance (register_eval.h), multi-threaded over frames and pairs.
-//   navtool register-eval DIVE [--frames N] [--min-overlap F] [--flat-overlap] [--threads T] [--json]
+//   navtool register-eval DIVE [--frames N] [--min-overlap F] [--flat-overlap] [--threads T]
+//                          [--json]
 //                          [--draw OUT.png] [--draw-scale S]
-// --json prints one object: frames, pairs, successes, success_fraction,
+// --json prints one object: frames, min_overlap, overlap ("visible" or "flat"), pairs,
+// successes, success_fraction,
 // median_rotation_error_deg, median_baseline_direction_error_deg, nees_mean, nees_median,
 // wrong (NEES > chi2_5^-1(0.999)), wrong_fraction (of the successes), failures {reason: count},
 // prior {position_sigma_m, angle_sigma_deg, depth_sigma_fixed_m, depth_sigma_fraction},
