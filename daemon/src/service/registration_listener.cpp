@@ -110,9 +110,13 @@ void fill_prior(const daemon::NavFilter& filter, const daemon::PendingRegistrati
     msg.prior_x_i_j[r] = prior->x_i_j[r];
     for (int c = 0; c < 6; ++c) msg.prior_covariance[6 * r + c] = prior->covariance(r, c);
   }
-  msg.altitude_i_m = prior->scene_depth_m;
+  // The images' own altitudes (the answerer forms its scene-depth interval from both:
+  // nav/vision/pccs.h scene_depth_prior) and the sigma of image i's.
+  for (const auto& image : filter.images())
+    if (image.frame_id == p.frame_i) msg.altitude_i_m = image.altitude_m;
   msg.altitude_j_m = filter.images().back().altitude_m;  // the robot is image j (prior found)
-  msg.altitude_sigma_m = prior->scene_depth_sigma_m;
+  msg.altitude_sigma_m =
+      vision.depth_sigma_fraction * msg.altitude_i_m + vision.depth_sigma_floor_m;
 }
 
 }  // namespace
