@@ -72,7 +72,7 @@ struct Frame {
   vision::Vec6 x_world_camera = vision::Vec6::Zero();
   double floor_depth_m = 0.0;
   sim::Polygon2 footprint;         ///< flat: on the plane at the depth below the camera
-  sim::VisibleFootprint visible;   ///< cast onto the 3-D scene
+  sim::VisibleFootprint visible;   ///< cast onto the 3-D scene (not with --flat-overlap)
   fs::path image;
 };
 
@@ -178,7 +178,8 @@ Dive read_dive(const EvalArgs& args) {
       throw CommandError("register-eval: the seafloor rebuilt from sim.json does not match the "
                          "altitude of frame " + std::to_string(f.id) + " in images.csv");
     f.footprint = sim::image_footprint(dive.geometry, x, f.floor_depth_m);
-    f.visible = sim::visible_footprint(renderer, dive.geometry, f.x_world_camera);
+    if (!args.flat_overlap)
+      f.visible = sim::visible_footprint(renderer, dive.geometry, f.x_world_camera);
     char name[32];
     std::snprintf(name, sizeof name, "images/%06lld.png", static_cast<long long>(f.id));
     f.image = dir / name;

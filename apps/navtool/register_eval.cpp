@@ -71,6 +71,35 @@ std::vector<vision::Match> true_correspondences(const vision::ImageFeatures& fi,
   return out;
 }
 
+/// Angle of the rotation between the relative rotations of two 5-DOF measurements, degrees.
+double rotation_error_deg(const Vec5& z, const Vec5& z_true) {
+  return Eigen::AngleAxisd(vision::rotation_from_z(z).transpose() * vision::rotation_from_z(z_true))
+             .angle() *
+         kDeg;
+}
+
+/// Fig. 4: true correspondences outside the PCCS band of the same prior mean with three
+/// covariances (register_eval.h), into e.true_correspondences and e.missed.
+void count_fig4_misses(const vision::Registration& registration, const vision::ImageFeatures& fi,
+                       const vision::ImageFeatures& fj, const PairTruth& truth,
+                       const vision::RelativePosePrior& prior, const PairEvalOptions& o,
+                       PairEval& e) {
+  const vision::CameraIntrinsics& camera = registration.camera();
+  const vision::PccsOptions& pccs = registration.options().pccs;
+  const double scale[3] = {1.0, o.bound_inflation, 1.0 / o.overconfidence};
+  const auto truths = true_correspondences(fi, fj, camera, truth.x_i_j, o.max_true_error_px);
+  e.true_correspondences = static_cast<int>(truths.size());
+  for (int c = 0; c < 3; ++c) {
+    vision::RelativePosePrior p = prior;
+    p.covariance *= scale[c];
+    for (const vision::Match& m : truths) {
+      const auto region = vision::search_region(fi.points_px[static_cast<std::size_t>(m.index_i)],
+                                                camera, p, pccs);
+      if (!region.contains(fj.points_px[static_cast<std::size_t>(m.index_j)])) ++e.missed[c];
+    }
+  }
+}
+
 }  // namespace
 
 vision::RelativePosePrior make_prior(const PairTruth& truth, const PairEvalOptions& o) {
@@ -103,62 +132,36 @@ PairEval evaluate_pair(const vision::Registration& registration, const vision::I
   e.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   e.residual_sigma_px = d.refinement.residual_sigma_px;
   e.inlier_area_fraction = d.refinement.inlier_area_fraction;
+  // The refinement's inliers: how many the true pose confirms, and how closely.
+  std::vector<Eigen::Vector2d> ui, uj;
   double sum_sq = 0.0;
   for (const int k : d.refinement.used_matches) {
     const vision::Match& m = d.matches.matches[static_cast<std::size_t>(k)];
-    const double r = true_reprojection_error_px(fi.points_px[static_cast<std::size_t>(m.index_i)],
-                                                fj.points_px[static_cast<std::size_t>(m.index_j)],
-                                                registration.camera(), truth.x_i_j);
+    ui.push_back(fi.points_px[static_cast<std::size_t>(m.index_i)]);
+    uj.push_back(fj.points_px[static_cast<std::size_t>(m.index_j)]);
+    const double r = true_reprojection_error_px(ui.back(), uj.back(), registration.camera(),
+                                                truth.x_i_j);
     if (r > o.max_true_error_px) continue;
     ++e.inliers_true;
     sum_sq += r * r;
   }
   if (e.inliers_true > 0) e.inliers_true_rms_px = std::sqrt(sum_sq / e.inliers_true);
-  if (e.result.success) {
-    std::vector<Eigen::Vector2d> ui, uj;
-    for (const int k : d.refinement.used_matches) {
-      const vision::Match& m = d.matches.matches[static_cast<std::size_t>(k)];
-      ui.push_back(fi.points_px[static_cast<std::size_t>(m.index_i)]);
-      uj.push_back(fj.points_px[static_cast<std::size_t>(m.index_j)]);
-    }
-    const auto r = vision::refine_two_view(ui, uj, registration.camera(),
-                                           core::rotation_from_euler(truth.x_i_j.tail<3>()),
-                                           truth.x_i_j.head<3>(), registration.options().refinement);
-    if (r.converged) {
-      e.truth_start_rms_px = r.reprojection_rms_px;
-      const Vec5 zt = vision::z_from_relative_pose(truth.x_i_j);
-      e.truth_start_rotation_deg = Eigen::AngleAxisd(vision::rotation_from_z(r.z).transpose() *
-                                                     vision::rotation_from_z(zt)).angle() * kDeg;
-    }
-  }
+  if (o.fig4) count_fig4_misses(registration, fi, fj, truth, prior, o, e);
+  if (!e.result.success) return e;
   const Vec5 z_true = vision::z_from_relative_pose(truth.x_i_j);
-  if (e.result.success) {
-    const Vec5& z = e.result.z;
-    e.rotation_error_deg =
-        Eigen::AngleAxisd(vision::rotation_from_z(z).transpose() * vision::rotation_from_z(z_true))
-            .angle() *
-        kDeg;
-    e.baseline_error_deg = angle_between(vision::baseline_direction(z[0], z[1]),
-                                         vision::baseline_direction(z_true[0], z_true[1])) *
-                           kDeg;
-    const Vec5 err = vision::z_minus(z, z_true);
-    e.nees = err.dot(e.result.covariance.ldlt().solve(err));
-  }
-  if (!o.fig4) return e;
-  // Fig. 4: the same prior mean, three covariances.
-  const vision::CameraIntrinsics& camera = registration.camera();
-  const vision::PccsOptions& pccs = registration.options().pccs;
-  const double scale[3] = {1.0, o.bound_inflation, 1.0 / o.overconfidence};
-  const auto truths = true_correspondences(fi, fj, camera, truth.x_i_j, o.max_true_error_px);
-  e.true_correspondences = static_cast<int>(truths.size());
-  for (int c = 0; c < 3; ++c) {
-    vision::RelativePosePrior p = prior;
-    p.covariance *= scale[c];
-    for (const vision::Match& m : truths) {
-      const auto region = vision::search_region(fi.points_px[static_cast<std::size_t>(m.index_i)],
-                                                camera, p, pccs);
-      if (!region.contains(fj.points_px[static_cast<std::size_t>(m.index_j)])) ++e.missed[c];
-    }
+  const Vec5& z = e.result.z;
+  e.rotation_error_deg = rotation_error_deg(z, z_true);
+  e.baseline_error_deg = angle_between(vision::baseline_direction(z[0], z[1]),
+                                       vision::baseline_direction(z_true[0], z_true[1])) *
+                         kDeg;
+  const Vec5 err = vision::z_minus(z, z_true);
+  e.nees = err.dot(e.result.covariance.ldlt().solve(err));
+  const auto from_truth = vision::refine_two_view(
+      ui, uj, registration.camera(), core::rotation_from_euler(truth.x_i_j.tail<3>()),
+      truth.x_i_j.head<3>(), registration.options().refinement);
+  if (from_truth.converged) {
+    e.truth_start_rms_px = from_truth.reprojection_rms_px;
+    e.truth_start_rotation_deg = rotation_error_deg(from_truth.z, z_true);
   }
   return e;
 }

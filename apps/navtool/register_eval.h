@@ -53,8 +53,10 @@ struct PairEval {
   /// Refinement inliers that the true pose confirms (as a true correspondence): few of
   /// result.inliers means wrong matches, all of them with a wrong z means the estimation.
   int inliers_true = 0;
-  double inliers_true_rms_px = 0.0;
-  double truth_start_rms_px = -1.0, truth_start_rotation_deg = -1.0;  ///< refinement from the truth  ///< RMS of the confirmed inliers' true-pose error in image j
+  double inliers_true_rms_px = 0.0;  ///< RMS of the confirmed inliers' true-pose error in image j
+  /// The refinement of the same inliers started from the true pose (-1 unless it converged):
+  /// the registration's optimum again means the data pull there, not a local minimum.
+  double truth_start_rms_px = -1.0, truth_start_rotation_deg = -1.0;
   double residual_sigma_px = 0.0;  ///< the refinement's a-posteriori pixel noise
   double inlier_area_fraction = 0.0;  ///< the refinement's inlier spread in image i
 };

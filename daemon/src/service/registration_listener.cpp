@@ -112,8 +112,8 @@ void fill_prior(const daemon::NavFilter& filter, const daemon::PendingRegistrati
   }
   // The images' own altitudes (the answerer forms its scene-depth interval from both:
   // nav/vision/pccs.h scene_depth_prior) and the sigma of image i's.
-  for (const auto& image : filter.images())
-    if (image.frame_id == p.frame_i) msg.altitude_i_m = image.altitude_m;
+  if (const core::ImageRecord* image_i = daemon::vision::find_image(filter, p.frame_i))
+    msg.altitude_i_m = image_i->altitude_m;
   msg.altitude_j_m = filter.images().back().altitude_m;  // the robot is image j (prior found)
   msg.altitude_sigma_m =
       vision.depth_sigma_fraction * msg.altitude_i_m + vision.depth_sigma_floor_m;

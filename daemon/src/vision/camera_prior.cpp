@@ -25,8 +25,6 @@ CameraPairPrior camera_pair_prior(const Vec6& x_world_body_i, const Vec6& x_worl
   return out;
 }
 
-namespace {
-
 const core::ImageRecord* find_image(const core::NavFilter& filter, std::uint64_t frame_id) {
   const auto& images = filter.images();
   for (auto it = images.rbegin(); it != images.rend(); ++it) {
@@ -34,8 +32,6 @@ const core::ImageRecord* find_image(const core::NavFilter& filter, std::uint64_t
   }
   return nullptr;
 }
-
-}  // namespace
 
 std::optional<nav::vision::RelativePosePrior> pair_prior_from_filter(
     const core::NavFilter& filter, const core::PendingRegistration& pair,

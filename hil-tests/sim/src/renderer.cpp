@@ -54,8 +54,10 @@ double Renderer::albedo(double x_m, double y_m, double relief_m, double footprin
   for (const Octave& o : kOctaves) {
     const double keep =
         footprint_m > 0.0 ? smooth(std::clamp(o.lattice_m / footprint_m - 1.0, 0.0, 1.0)) : 1.0;
-    if (keep > 0.0)
-      a += keep * o.weight * (value_noise(x_m / o.lattice_m, y_m / o.lattice_m, seed_ + o.seed) - 0.5);
+    if (keep > 0.0) {
+      const double noise = value_noise(x_m / o.lattice_m, y_m / o.lattice_m, seed_ + o.seed);
+      a += keep * o.weight * (noise - 0.5);
+    }
   }
   return std::clamp(a, 0.05, 1.0);
 }
@@ -210,7 +212,6 @@ cv::Mat Renderer::render(const core::Vec12& x, std::uint64_t frame_seed, double*
     auto* row = radiance.ptr<float>(v);
     for (int u = 0; u < w; ++u) {
       // Pixel u's centre is at u (the pinhole model's convention: u = fx X / Z + cx).
-      // Pixel u's centre is at u (the pinhole model's convention: u = fx X / Z + cx).
       const core::Vec3 ray_cam((u - camera_.cx_px) / camera_.fx_px,
                                (v - camera_.cy_px) / camera_.fy_px, 1.0);
       const core::Vec3 d = R * ray_cam;
@@ -230,7 +231,9 @@ cv::Mat Renderer::render(const core::Vec12& x, std::uint64_t frame_seed, double*
       const double footprint_m =
           r_cam / (camera_.fx_px * std::max(0.2, std::abs(n.dot(d)) / d.norm()));
       const double cos2 = cos_axis * cos_axis;
-      row[u] += static_cast<float>(albedo(q.x(), q.y(), seafloor_->relief_height_m(q.x(), q.y()), footprint_m) *
+      const double a =
+          albedo(q.x(), q.y(), seafloor_->relief_height_m(q.x(), q.y()), footprint_m);
+      row[u] += static_cast<float>(a *
                                    lambert /
                                    (r_strobe * r_strobe) *
                                    std::exp(-options_.attenuation_per_m * (r_strobe + r_cam)) *

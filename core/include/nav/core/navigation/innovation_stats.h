@@ -73,10 +73,10 @@ struct SensorInnovation {
   std::array<int, 3> kind_offset{};    ///< their first component in `last`
 };
 
-/// The innovation of an update (see the file comment); P is the 12 x 12 robot covariance.
 /// νᵀ S⁻¹ ν by Cholesky; nullopt when S is not positive definite or the result is not finite.
 std::optional<double> nis_of(const MeasVec& nu, const MeasCov& S);
 
+/// The innovation of an update (see the file comment); P is the 12 x 12 robot covariance.
 template <class Model>
 InnovationSample innovation_sample(const Model& model, const MeasVec& z, const MeasVec& h,
                                    const MeasJac& H, const Mat12& P, const MeasCov& R);
@@ -106,9 +106,6 @@ class SensorInnovationStats {
   std::vector<SensorInnovation> sensors_;
   std::vector<int> index_of_sensor_;  ///< sensor -> sensors_ index (-1 none)
 };
-
-/// νᵀ S⁻¹ ν by Cholesky; nullopt when S is not positive definite or the result is not finite.
-std::optional<double> nis_of(const MeasVec& nu, const MeasCov& S);
 
 template <class Model>
 InnovationSample innovation_sample(const Model& model, const MeasVec& z, const MeasVec& h,

@@ -36,6 +36,9 @@ CameraPairPrior camera_pair_prior(const core::Vec6& x_world_body_i,
                                   const core::Mat12& pose_joint_j_i,
                                   const core::Vec6& x_body_camera);
 
+/// The filter's record of image frame_id (the newest with that id), or nullptr.
+const core::ImageRecord* find_image(const core::NavFilter& filter, std::uint64_t frame_id);
+
 /// The prior of a pair the filter has just deferred at image j (call right after the image's
 /// measurement: the robot is image j and the proposal joint is rebuilt from the same bounds and
 /// recovery the proposer used). Scene depth: between image i's and image j's altitude
