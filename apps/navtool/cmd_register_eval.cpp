@@ -361,11 +361,11 @@ void run_register_eval(const EvalArgs& args) {
       const PairEval& e = evals[k];
       std::fprintf(stderr,
                    "pair %lld-%lld (overlap %.2f): %s inliers %d/%d true %d (%.2f px) rotation %.3f deg baseline %.2f deg NEES %.1f "
-                   "rms %.2f px [from truth rms %.3f rot %.3f] sigma %.2f px area %.3f truths %d missed %d/%d/%d %s\n",
+                   "rms %.2f px [from truth rms %.3f rot %.3f] sigma %.2f px area %.3f lev %.3f truths %d missed %d/%d/%d %s\n",
                    static_cast<long long>(dive.frames[static_cast<std::size_t>(pairs[k].i)].id),
                    static_cast<long long>(dive.frames[static_cast<std::size_t>(pairs[k].j)].id),
                    pairs[k].overlap, e.result.success ? "ok" : "FAILED", e.result.inliers, e.result.putative_matches, e.inliers_true, e.inliers_true_rms_px,
-                   e.rotation_error_deg, e.baseline_error_deg, e.nees, e.result.reprojection_rms_px, e.truth_start_rms_px, e.truth_start_rotation_deg, e.residual_sigma_px, e.inlier_area_fraction,
+                   e.rotation_error_deg, e.baseline_error_deg, e.nees, e.result.reprojection_rms_px, e.truth_start_rms_px, e.truth_start_rotation_deg, e.residual_sigma_px, e.inlier_area_fraction, e.max_leverage,
                    e.true_correspondences, e.missed[0], e.missed[1], e.missed[2], e.result.reason.c_str());
     }
   }

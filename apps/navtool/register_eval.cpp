@@ -132,6 +132,7 @@ PairEval evaluate_pair(const vision::Registration& registration, const vision::I
   e.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   e.residual_sigma_px = d.refinement.residual_sigma_px;
   e.inlier_area_fraction = d.refinement.inlier_area_fraction;
+  e.max_leverage = d.refinement.max_leverage;
   // The refinement's inliers: how many the true pose confirms, and how closely.
   std::vector<Eigen::Vector2d> ui, uj;
   double sum_sq = 0.0;

@@ -59,6 +59,7 @@ struct PairEval {
   double truth_start_rms_px = -1.0, truth_start_rotation_deg = -1.0;
   double residual_sigma_px = 0.0;  ///< the refinement's a-posteriori pixel noise
   double inlier_area_fraction = 0.0;  ///< the refinement's inlier spread in image i
+  double max_leverage = 0.0;          ///< the refinement's largest leverage of one inlier
 };
 
 /// The prior of pair `truth` (mean drawn from P with a generator seeded by seed, i, j).

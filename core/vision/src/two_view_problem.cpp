@@ -5,6 +5,7 @@
 #include "two_view_problem.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <Eigen/SVD>
@@ -193,6 +194,79 @@ bool schur(const NormalEquations& ne, double lambda, Mat5& S, Vec5& b,
   }
   S = 0.5 * (S + S.transpose()).eval();
   return S.allFinite() && b.allFinite();
+}
+
+std::vector<Vec5> point_information(const PoseState& x, const std::vector<Eigen::Vector3d>& X,
+                                    const std::vector<Eigen::Vector2d>& u_i,
+                                    const std::vector<Eigen::Vector2d>& u_j,
+                                    const CameraIntrinsics& cam, double inv_sigma) {
+  const PoseTerms pose(x);
+  std::vector<Vec5> out(X.size());
+  for (std::size_t k = 0; k < X.size(); ++k) {
+    const PointResidual p = point_residual(pose, cam, X[k], u_i[k], u_j[k], inv_sigma, true);
+    Eigen::Matrix<double, 4, 3> J_p;
+    J_p << p.J_i_p, p.J_j_p;
+    // q: the residual direction the point's own 3 unknowns cannot absorb.
+    const Eigen::JacobiSVD<Eigen::Matrix<double, 4, 3>> svd(J_p, Eigen::ComputeFullU);
+    const Eigen::Vector4d q = svd.matrixU().col(3);
+    out[k] = p.J_j_z.transpose() * q.tail<2>();
+  }
+  return out;
+}
+
+namespace {
+
+/// (I - H)^-1 for H = A^T C A, whose eigenvalues lie in [0, 1]: 1 where the matches of A's
+/// columns alone decide a direction of the pose (no redundancy, an infinite detection limit),
+/// clamped there to 1 - 1e-9 so that the bound stays finite.
+Eigen::MatrixXd redundancy_inverse(const Eigen::MatrixXd& A, const Mat5& C) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(A.transpose() * C * A);
+  const Eigen::VectorXd inv = (1.0 - eig.eigenvalues().array()).max(1e-9).inverse().matrix();
+  return eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
+}
+
+/// Mahalanobis size of the pose shift that blunders in A's matches at their detection limit
+/// cause, per unit delta0^2: the largest eigenvalue of (I - H)^-1 H.
+double group_shift(const Eigen::MatrixXd& A, const Mat5& C) {
+  const Eigen::MatrixXd H = A.transpose() * C * A;
+  return (redundancy_inverse(A, C) * H).eigenvalues().real().maxCoeff();
+}
+
+Eigen::MatrixXd columns(const std::vector<Vec5>& a, const std::vector<std::size_t>& group) {
+  Eigen::MatrixXd A(5, static_cast<Eigen::Index>(group.size()));
+  for (std::size_t g = 0; g < group.size(); ++g) A.col(static_cast<Eigen::Index>(g)) = a[group[g]];
+  return A;
+}
+
+}  // namespace
+
+ReliabilityBound reliability_bound(const std::vector<Vec5>& a, const Mat5& C, double delta0,
+                                   int max_group) {
+  ReliabilityBound out;
+  for (const Vec5& a_k : a) out.max_leverage = std::max(out.max_leverage, a_k.dot(C * a_k));
+  if (!(delta0 > 0.0)) return out;
+  double size = 0.0;
+  while (static_cast<int>(out.group.size()) < max_group && out.group.size() < a.size()) {
+    std::vector<std::size_t> trial = out.group;
+    trial.push_back(0);
+    std::size_t best = a.size();
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      if (std::find(out.group.begin(), out.group.end(), k) != out.group.end()) continue;
+      trial.back() = k;
+      const double s = group_shift(columns(a, trial), C);
+      if (s > size) {
+        size = s;
+        best = k;
+      }
+    }
+    if (best == a.size()) break;
+    out.group.push_back(best);
+  }
+  if (out.group.empty()) return out;
+  const Eigen::MatrixXd A = columns(a, out.group);
+  const Eigen::MatrixXd CA = C * A;
+  out.covariance = delta0 * delta0 * CA * redundancy_inverse(A, C) * CA.transpose();
+  return out;
 }
 
 LmOutcome levenberg_marquardt(PoseState& x, std::vector<Eigen::Vector3d>& X,

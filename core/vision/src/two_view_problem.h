@@ -80,6 +80,33 @@ struct NormalEquations {
 bool schur(const NormalEquations& ne, double lambda, Mat5& S, Vec5& b,
            std::vector<Eigen::Matrix3d>& H_kk_inv);
 
+/// Each point's share of the undamped Schur complement at a solution with unit weights,
+/// S = sum_k a_k a_k^T: its information on the pose once its own 3-D point is eliminated is
+/// rank one (4 residuals, 3 point unknowns), a_k = J_z^T q_k with q_k the unit residual
+/// direction orthogonal to the point Jacobian's columns. Its leverage h_k = a_k^T S^-1 a_k
+/// (sum_k h_k = 5) is the hat-matrix diagonal of regression (Hoaglin & Welsch, Am. Stat.
+/// 32(1), 1978): near 1, the point decides a direction of the pose alone.
+std::vector<Vec5> point_information(const PoseState& x, const std::vector<Eigen::Vector3d>& p,
+                                    const std::vector<Eigen::Vector2d>& u_i,
+                                    const std::vector<Eigen::Vector2d>& u_j,
+                                    const CameraIntrinsics& cam, double inv_sigma);
+
+/// Baarda's external reliability (Foerstner, "Reliability analysis of parameter estimation in
+/// linear models with applications to mensuration problems in computer vision", CVGIP 40(3),
+/// 1987): blunders in a group G of matches, of joint non-centrality delta0 (at the limit the
+/// residuals can detect), shift the pose by dz with dz dz^T <= delta0^2 C A_G (I - H_GG)^-1
+/// A_G^T C, C = S^-1 the pose covariance, A_G the matches' columns a_k (point_information),
+/// H_GG = A_G^T C A_G. G is grown greedily from the match of largest leverage up to max_group
+/// matches, each time by the match that enlarges the shift's Mahalanobis size most: mismatches
+/// that agree with each other mask one another, and one match's leverage does not show them.
+struct ReliabilityBound {
+  Mat5 covariance = Mat5::Zero();  ///< That bound, in the parameters of C; zero if delta0 <= 0.
+  std::vector<std::size_t> group;  ///< G, indices into a.
+  double max_leverage = 0.0;       ///< max_k a_k^T C a_k.
+};
+ReliabilityBound reliability_bound(const std::vector<Vec5>& a, const Mat5& C, double delta0,
+                                   int max_group);
+
 /// Result of one Levenberg-Marquardt run.
 struct LmOutcome {
   int iterations = 0;

@@ -273,15 +273,22 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
   }
   const Mat5 covariance_delta = eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
                                 eig.eigenvectors().transpose();
+  const ReliabilityBound reliability =
+      reliability_bound(point_information(x, X, ui, uj, cam, inv_sigma), covariance_delta,
+                        opt.reliability_delta0, opt.reliability_group);
+  out.max_leverage = reliability.max_leverage;
+  for (const std::size_t k : reliability.group)
+    out.reliability_matches.push_back(out.used_matches[k]);
   Mat5 J = Mat5::Zero();
   J.topLeftCorner<2, 2>() = G.topLeftCorner<2, 3>() * tangent_basis(x.t);
   J.bottomRightCorner<3, 3>().setIdentity();
-  out.covariance = J * covariance_delta * J.transpose();
   if (opt.scale_by_residual_variance) {
     const double ratio = out.residual_sigma_px / opt.pixel_sigma_px;
     out.covariance_scale = std::max(1.0, ratio * ratio);
-    out.covariance *= out.covariance_scale;
   }
+  out.information_covariance = out.covariance_scale * J * covariance_delta * J.transpose();
+  out.reliability_covariance = out.covariance_scale * J * reliability.covariance * J.transpose();
+  out.covariance = out.information_covariance + out.reliability_covariance;
   out.converged = true;
   return out;
 }

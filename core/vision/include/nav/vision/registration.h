@@ -37,13 +37,13 @@ struct RegistrationOptions {
   MatchingOptions matching;
   PccsOptions pccs;
   EssentialOptions essential;
-  /// Refinement. Its pure-rotation floor is set to EssentialOptions::min_parallax_px (0.5
-  /// sigma = 0.25 px) rather than 3 sigma: slow survey pairs (Sparus consecutive frames, median
-  /// derotated parallax ~0.6 px) still measure the rotation well, and their weakly observed
-  /// baseline direction shows in the 5x5 covariance instead of a rejection.
+  /// Refinement. Its pure-rotation floor is EssentialOptions::min_parallax_px (0.25 px) rather
+  /// than 3 sigma: slow survey pairs (Sparus consecutive frames, median derotated parallax
+  /// ~0.6 px) still measure the rotation well, and their weakly observed baseline direction
+  /// shows in the 5x5 covariance instead of a rejection.
   TwoViewRefinementOptions refinement = [] {
     TwoViewRefinementOptions o;
-    o.min_parallax_sigma = 0.5;
+    o.min_parallax_sigma = EssentialOptions{}.min_parallax_px / o.pixel_sigma_px;
     return o;
   }();
   ValidationOptions validation;
