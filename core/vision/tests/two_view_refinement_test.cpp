@@ -21,8 +21,8 @@
 #include <numbers>
 #include <random>
 
+#include "dense_two_view.h"
 #include "nav/core/geometry/rotation.h"
-#include "nav/testing/numeric_jacobian.h"
 #include "nav/vision/relative_pose_5dof.h"
 #include "synthetic_two_view.h"
 
@@ -165,29 +165,22 @@ TEST(TwoViewRefinement, CovarianceEqualsDenseInverseOfFullInformation) {
   const TwoViewRefinement r = refine_two_view(s.u_i, s.u_j, s.camera, R0, t0, o);
   ASSERT_TRUE(r.converged) << r.reason;
   const int n = static_cast<int>(r.points_i.size());
-  Eigen::VectorXd theta(5 + 3 * n);
-  theta.head<5>() = r.z;
-  for (int k = 0; k < n; ++k) theta.segment<3>(5 + 3 * k) = r.points_i[k];
-  const auto residuals = [&](const Eigen::VectorXd& v) {
-    std::vector<Eigen::Vector3d> X(n);
-    for (int k = 0; k < n; ++k) X[k] = v.segment<3>(5 + 3 * k);
-    return two_view_residuals(v.head<5>(), X, s.u_i, s.u_j, s.camera, kSigmaPx);
-  };
-  const Eigen::MatrixXd J = nav::testing::numeric_jacobian(residuals, theta, 1e-7);
+  const test::DenseTwoView dense = test::dense_two_view(r, s, kSigmaPx);
+  const Eigen::MatrixXd& J = dense.J;
   const Eigen::MatrixXd H = J.transpose() * J;
   const Eigen::MatrixXd P = H.inverse();
   const Mat5 P_zz = P.topLeftCorner<5, 5>();
   // The a-posteriori factor, from the residuals at the solution: max(1, RSS / (n - 5)) in
   // whitened units (4n residuals, 3n + 5 unknowns).
-  const double factor = std::max(1.0, residuals(theta).squaredNorm() / (n - 5));
+  const double factor = std::max(1.0, dense.residuals.squaredNorm() / (n - 5));
   EXPECT_NEAR(r.covariance_scale, factor, 1e-9 * factor);
   const double rel = (factor * P_zz - r.information_covariance).norm() / (factor * P_zz.norm());
   std::cout << "covariance vs dense inverse: relative difference " << rel << "\n";
   EXPECT_LT(rel, 1e-4);
   // And the solution is a stationary point of the cost: the Newton decrement g^T H^-1 g
   // (the cost a further Gauss-Newton step would gain) is negligible against the cost.
-  const Eigen::VectorXd g = J.transpose() * residuals(theta);
-  EXPECT_LT(g.dot(P * g), 1e-8 * residuals(theta).squaredNorm());
+  const Eigen::VectorXd g = J.transpose() * dense.residuals;
+  EXPECT_LT(g.dot(P * g), 1e-8 * dense.residuals.squaredNorm());
 }
 
 TEST(TwoViewRefinement, GrossMismatchesRejected) {

@@ -16,7 +16,7 @@
 #include <random>
 #include <vector>
 
-#include "nav/testing/numeric_jacobian.h"
+#include "dense_two_view.h"
 #include "nav/vision/relative_pose_5dof.h"
 #include "nav/vision/two_view_refinement.h"
 #include "synthetic_two_view.h"
@@ -35,21 +35,14 @@ struct DenseProblem {
 
 DenseProblem dense_problem(const TwoViewRefinement& r, const test::TwoViewScene& s) {
   const int n = static_cast<int>(r.points_i.size());
-  Eigen::VectorXd theta(5 + 3 * n);
-  theta.head<5>() = r.z;
-  for (int k = 0; k < n; ++k) theta.segment<3>(5 + 3 * k) = r.points_i[k];
-  const auto residuals = [&](const Eigen::VectorXd& v) {
-    std::vector<Eigen::Vector3d> X(n);
-    for (int k = 0; k < n; ++k) X[k] = v.segment<3>(5 + 3 * k);
-    return two_view_residuals(v.head<5>(), X, s.u_i, s.u_j, s.camera, kSigmaPx);
-  };
-  const Eigen::MatrixXd J = nav::testing::numeric_jacobian(residuals, theta, 1e-7);
+  const test::DenseTwoView dense = test::dense_two_view(r, s, kSigmaPx);
+  const Eigen::MatrixXd& J = dense.J;
   const Eigen::MatrixXd H_inv = (J.transpose() * J).inverse();
   DenseProblem d;
   d.P_z = (H_inv * J.transpose()).topRows(5);
   d.R = Eigen::MatrixXd::Identity(J.rows(), J.rows()) - J * H_inv * J.transpose();
   d.C = H_inv.topLeftCorner<5, 5>();
-  d.factor = std::max(1.0, residuals(theta).squaredNorm() / (n - 5));
+  d.factor = std::max(1.0, dense.residuals.squaredNorm() / (n - 5));
   return d;
 }
 
