@@ -58,9 +58,10 @@
 namespace nav::vision {
 
 struct TwoViewRefinementOptions {
-  /// Isotropic pixel noise of every feature, each axis: a floor (rendered survey pairs fit at
-  /// s_hat ~0.2 px; noisier imagery raises the covariance by the a-posteriori factor).
-  double pixel_sigma_px = 0.3;
+  /// Isotropic pixel noise of every feature, each axis, and the floor of the a-posteriori
+  /// factor. Rendered survey pairs fit at s_hat ~0.2 px, but 0.3 px made navd's vision replay
+  /// worse (docs/performance.md, "Vision in the loop"): their errors are not independent.
+  double pixel_sigma_px = 0.5;
   double huber_threshold_sigma = 3.0;       ///< Huber kink in units of sigma (per residual pair).
   int max_iterations = 200;                 ///< Per solve round; weak baselines take ~100.
   double function_tolerance = 1e-8;         ///< Stop when relative cost decrease is below.
