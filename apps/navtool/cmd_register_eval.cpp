@@ -4,7 +4,7 @@
 // footprints at the depth below each camera), with a prior from the truth plus a stated
 // covariance (register_eval.h), multi-threaded over frames and pairs.
 //   navtool register-eval DIVE [--frames N] [--min-overlap F] [--flat-overlap] [--threads T]
-//                          [--json]
+//                          [--reliability DELTA0] [--json]
 //                          [--draw OUT.png] [--draw-scale S]
 // --json prints one object: frames, min_overlap, overlap ("visible" or "flat"), pairs,
 // successes, success_fraction,
@@ -61,6 +61,7 @@ struct EvalArgs {
   bool flat_overlap = false;
   int threads = 2;
   double draw_scale = 0.5;
+  double reliability_delta0 = 0.0;
   int fig4_every = 1;
   bool json = false;
   bool verbose = false;
@@ -326,6 +327,7 @@ void run_register_eval(const EvalArgs& args) {
   const Dive dive = read_dive(args);
   vision::RegistrationOptions options;
   options.preprocess.bits_per_pixel = dive.bits_per_pixel;
+  options.refinement.reliability_delta0 = args.reliability_delta0;
   const vision::Registration registration(dive.camera, options);
   const int n = static_cast<int>(dive.frames.size());
   std::vector<vision::ImageFeatures> features(static_cast<std::size_t>(n));
@@ -408,6 +410,10 @@ void add_register_eval(CLI::App& app) {
   cmd->add_option("--prior-sigma-m", args->pair.prior_position_sigma_m,
                   "prior position sigma, each axis (default 0.25 m)");
   cmd->add_option("--seed", args->pair.seed, "seed of the prior draws (default 1)");
+  cmd->add_option("--reliability", args->reliability_delta0,
+                  "add to each covariance the shift of undetectable blunders of this "
+                  "non-centrality (two_view_refinement.h; 4.13: Baarda's; default 0: off)")
+      ->check(CLI::Range(0.0, 100.0));
   cmd->add_option("--fig4-every", args->fig4_every,
                   "count the Fig. 4 band misses on every k-th pair only (default 1: all)")
       ->check(CLI::Range(1, 1000000));

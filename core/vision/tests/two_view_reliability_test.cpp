@@ -25,6 +25,7 @@ namespace nav::vision {
 namespace {
 
 constexpr double kSigmaPx = 0.5;
+constexpr double kDelta0 = 4.13;  // Baarda: 0.1 % two-sided test, 80 % power
 
 struct DenseProblem {
   Eigen::MatrixXd P_z;  ///< rows of z in H^-1 J^T: the estimate's response to the residuals
@@ -76,6 +77,7 @@ Case weak_case(int group, std::uint32_t seed) {
   TwoViewRefinementOptions o;
   o.pixel_sigma_px = kSigmaPx;
   o.huber_threshold_sigma = 1e9;  // plain least squares: every weight 1, every match kept
+  o.reliability_delta0 = kDelta0;
   o.reliability_group = group;
   c.r = refine_two_view(c.scene.u_i, c.scene.u_j, c.scene.camera, core::pose_rotation(x),
                         core::pose_translation(x), o);
@@ -89,9 +91,7 @@ TEST(TwoViewReliability, SingleMatchBoundEqualsDenseReferenceAndTakesTheLargestS
   ASSERT_TRUE(c.r.converged) << c.r.reason;
   ASSERT_EQ(c.r.reliability_matches.size(), 1u);
   const DenseProblem d = dense_problem(c.r, c.scene);
-  const TwoViewRefinementOptions defaults;
-  const Mat5 expected =
-      d.factor * dense_bound(d, c.r.reliability_matches, defaults.reliability_delta0);
+  const Mat5 expected = d.factor * dense_bound(d, c.r.reliability_matches, kDelta0);
   const double rel = relative_difference(c.r.reliability_covariance, expected);
   std::cout << "single-match bound vs dense: relative difference " << rel << ", max leverage "
             << c.r.max_leverage << "\n";
@@ -100,9 +100,7 @@ TEST(TwoViewReliability, SingleMatchBoundEqualsDenseReferenceAndTakesTheLargestS
   const Eigen::LDLT<Mat5> C(d.C);
   const double chosen = C.solve(expected / d.factor).trace();
   for (int k = 0; k < static_cast<int>(c.r.used_matches.size()); ++k)
-    EXPECT_LE(C.solve(dense_bound(d, {k}, defaults.reliability_delta0)).trace(),
-              chosen * (1 + 1e-6))
-        << "match " << k;
+    EXPECT_LE(C.solve(dense_bound(d, {k}, kDelta0)).trace(), chosen * (1 + 1e-6)) << "match " << k;
   EXPECT_NEAR(c.r.covariance.norm(),
               (c.r.information_covariance + c.r.reliability_covariance).norm(), 1e-12);
 }
@@ -113,8 +111,7 @@ TEST(TwoViewReliability, GroupBoundEqualsDenseReference) {
     ASSERT_TRUE(c.r.converged) << c.r.reason;
     ASSERT_EQ(static_cast<int>(c.r.reliability_matches.size()), group);
     const DenseProblem d = dense_problem(c.r, c.scene);
-    const Mat5 expected = d.factor * dense_bound(d, c.r.reliability_matches,
-                                                 TwoViewRefinementOptions{}.reliability_delta0);
+    const Mat5 expected = d.factor * dense_bound(d, c.r.reliability_matches, kDelta0);
     EXPECT_LT(relative_difference(c.r.reliability_covariance, expected), 1e-4) << group;
   }
 }

@@ -36,12 +36,15 @@
 // The information describes independent noise only. A few mismatches that agree with a nearby
 // pose leave residuals the test cannot see when they dominate a direction of the pose (few
 // inliers on a small patch): measured on rendered survey pairs, such pairs were 1-18 deg off at
-// 0.05-0.2 px residuals. So the covariance adds Baarda's external reliability (Foerstner,
-// CVGIP 40(3), 1987): the shift that blunders at their detection limit (non-centrality
-// reliability_delta0) in the reliability_group matches of largest joint leverage would cause,
+// 0.05-0.2 px residuals. With reliability_delta0 > 0 the covariance adds Baarda's external
+// reliability (Foerstner, CVGIP 40(3), 1987): the shift that blunders at their detection limit
+// (non-centrality reliability_delta0) in the reliability_group matches of largest joint
+// leverage would cause,
 //   covariance = s_f (C + delta0^2 C A_G (I - A_G^T C A_G)^-1 A_G^T C),
 // C the information's inverse, A_G the matches' rank-one information columns, s_f the factor
-// above (two_view_problem.h reliability_bound). Small where every match has small leverage.
+// above (two_view_problem.h reliability_bound). Off by default: it halves the wrong
+// registrations against the truth but lets the filter's gate pass more of them, and navd's
+// vision replay navigated worse with it (docs/performance.md, "Vision in the loop").
 //
 // Failures (converged == false, `reason` says why and with which numbers): fewer than
 // min_points usable matches; too many matches triangulating behind either camera; median
@@ -76,9 +79,9 @@ struct TwoViewRefinementOptions {
   double min_parallax_sigma = 3.0;
   double min_rcond = 1e-12;  ///< Smallest reciprocal condition of S.
   /// Non-centrality of blunders at the detection limit (Baarda: 4.13 for a two-sided test at
-  /// 0.1 % with 80 % power; 0: the information alone) and the largest group of matches
-  /// blundering together, for the reliability term of the covariance.
-  double reliability_delta0 = 4.13;
+  /// 0.1 % with 80 % power; 0: the information alone, the default) and the largest group of
+  /// matches blundering together, for the reliability term of the covariance.
+  double reliability_delta0 = 0.0;
   int reliability_group = 3;
   /// Multiply the covariance by max(1, residual_sigma_px^2 / pixel_sigma_px^2).
   bool scale_by_residual_variance = true;
