@@ -226,10 +226,14 @@ Eigen::MatrixXd redundancy_inverse(const Eigen::MatrixXd& A, const Mat5& C) {
 }
 
 /// Mahalanobis size of the pose shift that blunders in A's matches at their detection limit
-/// cause, per unit delta0^2: the largest eigenvalue of (I - H)^-1 H.
+/// cause, per unit delta0^2: the largest eigenvalue of (I - H)^-1 H, i.e. of lambda / (1 - lambda)
+/// over H's eigenvalues lambda (clamped as in redundancy_inverse).
 double group_shift(const Eigen::MatrixXd& A, const Mat5& C) {
-  const Eigen::MatrixXd H = A.transpose() * C * A;
-  return (redundancy_inverse(A, C) * H).eigenvalues().real().maxCoeff();
+  const Eigen::ArrayXd lambda =
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A.transpose() * C * A, Eigen::EigenvaluesOnly)
+          .eigenvalues()
+          .array();
+  return (lambda / (1.0 - lambda).max(1e-9)).maxCoeff();
 }
 
 Eigen::MatrixXd columns(const std::vector<Vec5>& a, const std::vector<std::size_t>& group) {

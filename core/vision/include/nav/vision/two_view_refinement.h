@@ -33,18 +33,16 @@
 // covariance is multiplied by max(1, s_hat^2 / s^2) (Hartley & Zisserman, section 5.1.3, the
 // a-posteriori variance factor; floored at 1 so a lucky fit of few points does not shrink it
 // below the configured localisation noise), reported in covariance_scale.
-// The information describes independent noise only. A few mismatches that agree with a nearby
-// pose leave residuals the test cannot see when they dominate a direction of the pose (few
-// inliers on a small patch): measured on rendered survey pairs, such pairs were 1-18 deg off at
-// 0.05-0.2 px residuals. With reliability_delta0 > 0 the covariance adds Baarda's external
-// reliability (Foerstner, CVGIP 40(3), 1987): the shift that blunders at their detection limit
+// The information describes independent noise only: a few mismatches that agree with a nearby
+// pose leave no visible residual when they dominate a direction of the pose (few inliers on a
+// small patch). With reliability_delta0 > 0 the covariance adds Baarda's external reliability
+// (Foerstner, CVGIP 40(3), 1987): the shift that blunders at their detection limit
 // (non-centrality reliability_delta0) in the reliability_group matches of largest joint
 // leverage would cause,
 //   covariance = s_f (C + delta0^2 C A_G (I - A_G^T C A_G)^-1 A_G^T C),
 // C the information's inverse, A_G the matches' rank-one information columns, s_f the factor
-// above (two_view_problem.h reliability_bound). Off by default: it halves the wrong
-// registrations against the truth but lets the filter's gate pass more of them, and navd's
-// vision replay navigated worse with it (docs/performance.md, "Vision in the loop").
+// above (two_view_problem.h reliability_bound). Off by default; why, with the measurements:
+// docs/performance.md, "Image registration" and "Vision in the loop".
 //
 // Failures (converged == false, `reason` says why and with which numbers): fewer than
 // min_points usable matches; too many matches triangulating behind either camera; median
@@ -62,8 +60,7 @@ namespace nav::vision {
 
 struct TwoViewRefinementOptions {
   /// Isotropic pixel noise of every feature, each axis, and the floor of the a-posteriori
-  /// factor. Rendered survey pairs fit at s_hat ~0.2 px, but 0.3 px made navd's vision replay
-  /// worse (docs/performance.md, "Vision in the loop"): their errors are not independent.
+  /// factor (its choice: docs/performance.md, "Image registration").
   double pixel_sigma_px = 0.5;
   double huber_threshold_sigma = 3.0;       ///< Huber kink in units of sigma (per residual pair).
   int max_iterations = 200;                 ///< Per solve round; weak baselines take ~100.
