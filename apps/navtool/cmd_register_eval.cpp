@@ -4,7 +4,7 @@
 // footprints at the depth below each camera), with a prior from the truth plus a stated
 // covariance (register_eval.h), multi-threaded over frames and pairs.
 //   navtool register-eval DIVE [--frames N] [--min-overlap F] [--flat-overlap] [--threads T]
-//                          [--reliability DELTA0] [--json]
+//                          [--reliability DELTA0] [--max-leverage H] [--json]
 //                          [--draw OUT.png] [--draw-scale S]
 // --json prints one object: frames, min_overlap, overlap ("visible" or "flat"), pairs,
 // successes, success_fraction,
@@ -12,9 +12,9 @@
 // wrong (NEES > chi2_5^-1(0.999)), wrong_fraction (of the successes), failures {reason: count},
 // prior {position_sigma_m, angle_sigma_deg, depth_sigma_fixed_m, depth_sigma_fraction},
 // fig4 {true_correspondences, missed_exact, missed_bound, missed_overconfident,
-// pairs_missed_exact, pairs_missed_bound, pairs_missed_overconfident, pairs_counted, bound_inflation,
-// overconfidence}, timing {features_cpu_ms_median, pair_cpu_ms_median, pair_wall_ms_median}.
-// Unreadable dive: message, exit status 1.
+// pairs_missed_exact, pairs_missed_bound, pairs_missed_overconfident, pairs_counted,
+// bound_inflation, overconfidence}, timing {features_cpu_ms_median, pair_cpu_ms_median,
+// pair_wall_ms_median}. Unreadable dive: message, exit status 1.
 #include <time.h>
 
 #include <nlohmann/json.hpp>
@@ -62,6 +62,7 @@ struct EvalArgs {
   int threads = 2;
   double draw_scale = 0.5;
   double reliability_delta0 = 0.0;
+  double max_leverage = vision::ValidationOptions{}.max_leverage;
   int fig4_every = 1;
   bool json = false;
   bool verbose = false;
@@ -328,6 +329,7 @@ void run_register_eval(const EvalArgs& args) {
   vision::RegistrationOptions options;
   options.preprocess.bits_per_pixel = dive.bits_per_pixel;
   options.refinement.reliability_delta0 = args.reliability_delta0;
+  options.validation.max_leverage = args.max_leverage;
   const vision::Registration registration(dive.camera, options);
   const int n = static_cast<int>(dive.frames.size());
   std::vector<vision::ImageFeatures> features(static_cast<std::size_t>(n));
@@ -414,6 +416,10 @@ void add_register_eval(CLI::App& app) {
                   "add to each covariance the shift of undetectable blunders of this "
                   "non-centrality (two_view_refinement.h; 4.13: Baarda's; default 0: off)")
       ->check(CLI::Range(0.0, 100.0));
+  cmd->add_option("--max-leverage", args->max_leverage,
+                  "refuse registrations with an inlier of a larger leverage (validation.h; "
+                  "default: the library's)")
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--fig4-every", args->fig4_every,
                   "count the Fig. 4 band misses on every k-th pair only (default 1: all)")
       ->check(CLI::Range(1, 1000000));

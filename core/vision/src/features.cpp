@@ -193,6 +193,8 @@ Status extract_features(const cv::Mat& image_8u, const CameraIntrinsics& camera,
     out.points_px = undistort_pixels(camera, pixels);
   }
   out.detector = std::move(detector);
+  out.size_px.reserve(keypoints.size());
+  for (const auto& k : keypoints) out.size_px.push_back(k.size);
   out.descriptors = descriptors.empty() ? cv::Mat(0, 128, CV_32F) : descriptors;
   out.width_px = image_8u.cols;
   out.height_px = image_8u.rows;

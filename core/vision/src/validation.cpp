@@ -86,6 +86,7 @@ void validate_registration(const TwoViewRefinement& refinement, const RelativePo
   result.inliers = static_cast<int>(refinement.used_matches.size());
   result.reprojection_rms_px = refinement.reprojection_rms_px;
   result.prior_chi2 = -1.0;
+  result.max_leverage = refinement.max_leverage;
   std::ostringstream why;
 
   // 1-4: the refinement itself.
@@ -106,6 +107,12 @@ void validate_registration(const TwoViewRefinement& refinement, const RelativePo
     why << result.inliers << " inliers spread over " << refinement.inlier_area_fraction
         << " of the frame (second-moment area), less than the " << options.min_inlier_area_fraction
         << " required";
+    set_failure(result, RegistrationFailure::kTooFewInliers, why.str());
+    return;
+  }
+  if (!(refinement.max_leverage <= options.max_leverage)) {
+    why << "one of the " << result.inliers << " inliers decides a direction of the pose alone: "
+        << "leverage " << refinement.max_leverage << " above " << options.max_leverage;
     set_failure(result, RegistrationFailure::kTooFewInliers, why.str());
     return;
   }

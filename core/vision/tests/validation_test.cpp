@@ -188,6 +188,51 @@ TEST(Validation, EachCheckFailsWithItsCode) {
   EXPECT_TRUE(contains(result.reason, "prior unusable")) << result.reason;
 }
 
+TEST(Validation, AMatchThatDecidesAPoseDirectionAloneFails) {
+  // The matches of one 120 x 120 px patch at the centre plus one far in a corner: the corner
+  // match alone pins the rotation about the optical axis, so its leverage is near 1, while
+  // every match of a scene spread over the frame has a small one (leverages sum to 5).
+  std::mt19937 rng(6);
+  const Vec6 x = test::default_x_i_j();
+  const TwoViewRefinement spread = refined(rng, x);
+  ASSERT_TRUE(spread.converged) << spread.reason;
+  EXPECT_LT(spread.max_leverage, 0.3);
+  const test::TwoViewScene wide = test::make_scene(rng, x, 4000, 3.5, 0.3, kSigmaPx);
+  std::vector<Eigen::Vector2d> u_i, u_j;
+  double corner_distance = 0.0;
+  std::size_t corner = 0;
+  for (std::size_t k = 0; k < wide.size(); ++k) {
+    const Eigen::Vector2d d = wide.u_i[k] - Eigen::Vector2d(wide.camera.cx_px, wide.camera.cy_px);
+    if (d.cwiseAbs().maxCoeff() < 60.0) {
+      u_i.push_back(wide.u_i[k]);
+      u_j.push_back(wide.u_j[k]);
+    }
+    if (d.norm() > corner_distance) corner_distance = d.norm(), corner = k;
+  }
+  u_i.push_back(wide.u_i[corner]);
+  u_j.push_back(wide.u_j[corner]);
+  TwoViewRefinementOptions o;
+  o.pixel_sigma_px = kSigmaPx;
+  const TwoViewRefinement lone =
+      refine_two_view(u_i, u_j, wide.camera, core::pose_rotation(x), core::pose_translation(x), o);
+  ASSERT_TRUE(lone.converged) << lone.reason;
+  EXPECT_GT(lone.max_leverage, 0.8) << u_i.size() << " matches";
+
+  const RelativePosePrior prior = prior_at(x);
+  ValidationOptions strict;
+  strict.min_inlier_area_fraction = 0.0;
+  strict.max_leverage = 0.8;
+  RegistrationResult result;
+  validate_registration(spread, &prior, strict, result);
+  EXPECT_TRUE(result.success) << result.reason;
+  validate_registration(lone, &prior, strict, result);
+  EXPECT_EQ(result.failure, RegistrationFailure::kTooFewInliers);
+  EXPECT_TRUE(contains(result.reason, "decides a direction of the pose alone")) << result.reason;
+  // The default accepts it (leverage is at most 1).
+  validate_registration(lone, &prior, ValidationOptions{.min_inlier_area_fraction = 0.0}, result);
+  EXPECT_NE(result.failure, RegistrationFailure::kTooFewInliers) << result.reason;
+}
+
 TEST(Validation, FailureNames) {
   EXPECT_EQ(failure_name(RegistrationFailure::kDepthOutOfPrior), "depth out of prior");
   EXPECT_EQ(failure_name(RegistrationFailure::kOk), "ok");

@@ -9,6 +9,10 @@
 //      inlier_area_fraction): a small cluster of matches pins the pose on one patch of the
 //      scene, where a few coherent mismatches (repeated texture, a moving shadow) can fit a
 //      wrong pose with sub-pixel residuals                    -> kTooFewInliers;
+//      and no match has a leverage above max_leverage (TwoViewRefinement::max_leverage, the
+//      match's share of the information in the pose direction it informs): near 1, that match
+//      decides a direction of the pose alone, so a mismatch there bends the pose until its own
+//      residual vanishes and no residual test can see it      -> kTooFewInliers;
 //   3. reprojection RMS <= max_reprojection_rms_px            -> kReprojectionError;
 //   4. every point in front of both cameras                   -> kRefinementFailed;
 //   5. with a prior: its baseline has a defined azimuth (else there is neither a depth scale
@@ -33,6 +37,9 @@ namespace nav::vision {
 struct ValidationOptions {
   int min_inliers = 12;
   double min_inlier_area_fraction = 0.03;
+  /// Largest leverage of one match (in (0, 1]; 1 accepts all). Its choice, measured:
+  /// docs/performance.md, "Image registration".
+  double max_leverage = 1.0;
   double max_reprojection_rms_px = 1.5;
   double depth_k_sigma = 3.0;
   double max_fraction_depth_outliers = 0.2;

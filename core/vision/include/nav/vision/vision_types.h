@@ -44,6 +44,9 @@ enum class Detector : std::uint8_t { kHarris = 0, kSift = 1 };
 struct ImageFeatures {
   std::vector<Eigen::Vector2d> points_px;  ///< Undistorted pixel coordinates.
   std::vector<Detector> detector;          ///< Detector of each point.
+  /// Keypoint diameter of each point, full-resolution pixels (SIFT: its detection scale;
+  /// Harris: the descriptor support). Empty when unknown.
+  std::vector<float> size_px;
   cv::Mat descriptors;                     ///< CV_32F, one row per point (SIFT, 128 wide).
   int width_px = 0, height_px = 0;         ///< Size of the preprocessed image.
   std::size_t size() const { return points_px.size(); }
@@ -108,6 +111,7 @@ struct RegistrationResult {
   std::size_t descriptor_comparisons = 0;
   double reprojection_rms_px = 0.0;
   double prior_chi2 = -1.0;  ///< chi2(5) of z against the prior's prediction; -1 without prior.
+  double max_leverage = 0.0;  ///< largest leverage of one inlier (TwoViewRefinement)
 };
 
 }  // namespace nav::vision
