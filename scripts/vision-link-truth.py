@@ -10,7 +10,8 @@ frame; config.yaml: the camera mount). REPLAY_OUT_DIR: `navtool replay DIVE --vi
 core CameraRelativePoseModel (azimuth, elevation of the baseline in camera i, relative roll,
 pitch, heading of camera j in camera i, Smith-Self-Cheeseman compounding with the mount) and
 d2 = e^T C^-1 e of the error e (angles wrapped) under the answer's covariance C. Prints one JSON
-line: answers, successful, accepted links, and how many of each exceed chi2(5 dof, 99.9 %).
+line: answers, successful, accepted links, and how many of each exceed chi2(5 dof, 99.9 %);
+with the inliers and max_leverage columns, the accepted links and those beyond by bins of each.
 """
 import csv
 import json
@@ -84,6 +85,17 @@ def wrap(a):
     return math.atan2(math.sin(a), math.cos(a))
 
 
+LEVERAGE_BINS = [0.0, 0.5, 0.8, 0.9, 0.95]  # lower edges
+INLIER_BINS = [0, 30, 60, 120]
+
+
+def count(bins, edges, value, bad):
+    """[accepted, beyond] of the bin whose lower edge is the largest one <= value."""
+    edge = max(e for e in edges if e <= value) if value >= edges[0] else edges[0]
+    bins[edge][0] += 1
+    bins[edge][1] += bad
+
+
 def main(dive, out):
     cfg = yaml.safe_load(open(f"{dive}/config.yaml"))
     cam = next(s for s in cfg["sensors"] if s["type"].startswith("camera"))
@@ -98,6 +110,8 @@ def main(dive, out):
     accepted = {(int(r["frame_i"]), int(r["frame_j"]))
                 for r in csv.DictReader(open(f"{out}/links.csv")) if r["outcome"] == "accepted"}
     n = ok = bad_ok = n_acc = bad_acc = 0
+    by_leverage = {b: [0, 0] for b in LEVERAGE_BINS}
+    by_inliers = {b: [0, 0] for b in INLIER_BINS}
     for r in csv.DictReader(open(f"{out}/vision_answers.csv")):
         n += 1
         if r["success"] != "1":
@@ -114,9 +128,14 @@ def main(dive, out):
         if (i, j) in accepted:
             n_acc += 1
             bad_acc += bad
+            if "max_leverage" in r:
+                count(by_leverage, LEVERAGE_BINS, float(r["max_leverage"]), bad)
+                count(by_inliers, INLIER_BINS, int(r["inliers"]), bad)
     print(json.dumps({"answers": n, "successful": ok, "successful_beyond_999": bad_ok,
                       "accepted": n_acc, "accepted_beyond_999": bad_acc,
-                      "accepted_beyond_999_fraction": bad_acc / n_acc if n_acc else None}))
+                      "accepted_beyond_999_fraction": bad_acc / n_acc if n_acc else None,
+                      "accepted_by_max_leverage_from": {str(b): v for b, v in by_leverage.items()},
+                      "accepted_by_inliers_from": {str(b): v for b, v in by_inliers.items()}}))
 
 
 if __name__ == "__main__":

@@ -37,14 +37,15 @@ struct ReplayArgs {
 
 /// vision_answers.csv: every answer of navd's vision stage applied in the replay, in proposal
 /// order: frame_i, frame_j, success, applied_us (data time), z0..z4 (CameraRelativePoseModel
-/// order), c00..c44 (5x5 covariance row-major), reason (quoted; "" on success).
+/// order), c00..c44 (5x5 covariance row-major), inliers and max_leverage (of registrations that
+/// got as far as the refinement, else 0), reason (quoted; "" on success).
 void write_vision_answers(const daemon::ReplayRun& run, const std::filesystem::path& path) {
   std::ofstream out(path);
   out << "frame_i,frame_j,success,applied_us";
   for (int k = 0; k < 5; ++k) out << ",z" << k;
   for (int r = 0; r < 5; ++r)
     for (int c = 0; c < 5; ++c) out << ",c" << r << c;
-  out << ",reason\n";
+  out << ",inliers,max_leverage,reason\n";
   out.precision(17);
   for (const daemon::vision::AppliedAnswer& a : run.vision_answers) {
     const core::Registration& g = a.registration;
@@ -53,6 +54,7 @@ void write_vision_answers(const daemon::ReplayRun& run, const std::filesystem::p
     for (int k = 0; k < 5; ++k) out << ',' << g.z(k);
     for (int r = 0; r < 5; ++r)
       for (int c = 0; c < 5; ++c) out << ',' << g.covariance(r, c);
+    out << ',' << a.inliers << ',' << a.max_leverage;
     std::string reason = a.reason;
     for (char& ch : reason) {
       if (ch == '"') ch = '\'';

@@ -29,6 +29,7 @@ vision:
   image_height_px: 480
   depth_sigma_fraction: 0.2
   depth_sigma_floor_m: 0.5
+  max_leverage: 0.75
 )");
   const VisionConfig& v = c.vision;
   EXPECT_TRUE(v.enabled);
@@ -41,6 +42,8 @@ vision:
   EXPECT_EQ(v.image_height_px, 480);
   EXPECT_EQ(v.depth_sigma_fraction, 0.2);
   EXPECT_EQ(v.depth_sigma_floor_m, 0.5);
+  EXPECT_EQ(v.max_leverage, 0.75);
+  EXPECT_FALSE(parse_config(kSensors).vision.max_leverage.has_value());
 }
 
 TEST(VisionConfig, OutOfRangeAndUnknownKeysNameTheKey) {
@@ -49,6 +52,12 @@ TEST(VisionConfig, OutOfRangeAndUnknownKeysNameTheKey) {
     FAIL() << "threads 0 accepted";
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("vision.threads"), std::string::npos) << e.what();
+  }
+  try {
+    parse_config(kSensors + "vision: {max_leverage: 1.5}\n", "t.yaml");
+    FAIL() << "leverage 1.5 accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("vision.max_leverage"), std::string::npos) << e.what();
   }
   try {
     parse_config(kSensors + "vision: {thread: 2}\n", "t.yaml");

@@ -2,7 +2,8 @@
 // vision_link.h) on a short rendered survey: two runs give identical links and poses (answers
 // applied at data times, whatever the threads' speed), consecutive frames register, and
 // missing, corrupt or wrong-size frames are failed answers with their reason while the filter
-// keeps navigating on the other sensors.
+// keeps navigating on the other sensors; answers carry their inliers and largest leverage, and
+// the config's leverage limit refuses registrations.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -99,6 +100,34 @@ TEST(SimVisionReplay, BadFramesFailTheirPairsAndTheFilterNavigatesOn) {
       EXPECT_NE(l.outcome, daemon::LinkOutcome::kAccepted) << l.frame_i << "-" << l.frame_j;
     }
   }
+}
+
+TEST(SimVisionReplay, AnswersCarryInliersAndLeverageAndTheLeverageLimitRefuses) {
+  const daemon::ReplayRun run = replay(vision_config());
+  ASSERT_TRUE(run.error.empty()) << run.error;
+  int succeeded = 0;
+  for (const auto& a : run.vision_answers) {
+    if (!a.registration.success) continue;
+    ++succeeded;
+    EXPECT_GE(a.inliers, 12) << a.registration.frame_id_i << "-" << a.registration.frame_id_j;
+    // n inliers' leverages sum to 5: the largest is in [5 / n, 1].
+    EXPECT_GE(a.max_leverage, 5.0 / a.inliers);
+    EXPECT_LE(a.max_leverage, 1.0);
+  }
+  ASSERT_GT(succeeded, 0);
+  // A limit below 5 / n refuses every registration that reaches the check, with the reason.
+  daemon::NavdConfig strict = vision_config();
+  strict.vision.max_leverage = 1e-3;
+  const daemon::ReplayRun refused = replay(strict);
+  ASSERT_TRUE(refused.error.empty()) << refused.error;
+  EXPECT_EQ(refused.vision->worker.succeeded, 0u);
+  int by_leverage = 0;
+  for (const auto& a : refused.vision_answers) {
+    if (a.reason.find("decides a direction of the pose alone") == std::string::npos) continue;
+    ++by_leverage;
+    EXPECT_GT(a.max_leverage, 1e-3);
+  }
+  EXPECT_GT(by_leverage, 0);
 }
 
 TEST(SimVisionReplay, LiveLinkAnswersEveryProposalPastItsDeadlineAsExpired) {

@@ -133,7 +133,7 @@ SimDiveConfig parse_sim(const YamlReader& c) {
 VisionConfig parse_vision(const YamlReader& v) {
   v.expect_map({"enabled", "threads", "cache_images", "queue_capacity", "answer_delay_s",
                 "image_dir", "image_width_px", "image_height_px", "depth_sigma_fraction",
-                "depth_sigma_floor_m"});
+                "depth_sigma_floor_m", "max_leverage"});
   VisionConfig vision;
   if (v.has("enabled")) vision.enabled = v.at("enabled").as_bool();
   v.read("threads", vision.threads, 1, 64);
@@ -145,6 +145,11 @@ VisionConfig parse_vision(const YamlReader& v) {
   v.read("image_height_px", vision.image_height_px, 0, 100000);
   v.read("depth_sigma_fraction", vision.depth_sigma_fraction, 0.0, 10.0);
   v.read("depth_sigma_floor_m", vision.depth_sigma_floor_m, 0.0, 1000.0);
+  if (v.has("max_leverage")) {
+    double h = 1.0;
+    v.read("max_leverage", h, 1e-6, 1.0);
+    vision.max_leverage = h;
+  }
   return vision;
 }
 

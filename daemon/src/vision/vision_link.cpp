@@ -80,6 +80,7 @@ VisionLink::VisionLink(const NavdConfig& config, std::string image_dir, Mode mod
   }
   nav::vision::RegistrationOptions options;
   options.preprocess.bits_per_pixel = bits_per_pixel(camera.camera.pixel_format);
+  if (config_.max_leverage) options.validation.max_leverage = *config_.max_leverage;
   registration_ = std::make_unique<nav::vision::Registration>(intrinsics, options);
   cache_ = std::make_unique<FeatureCache>(static_cast<std::size_t>(config_.cache_images));
   VisionWorkerOptions w;
@@ -144,7 +145,8 @@ void VisionLink::before_measurement(std::int64_t host_realtime_us,
     outstanding_.erase(outstanding_.begin());
     core::Registration reg = done.answer->registration;
     reg.available_us = done.due_realtime_us;
-    applied_.push_back(AppliedAnswer{reg, done.answer->reason});
+    applied_.push_back(
+        AppliedAnswer{reg, done.answer->reason, done.answer->inliers, done.answer->max_leverage});
     try {
       table.insert(reg);
     } catch (const std::invalid_argument& e) {

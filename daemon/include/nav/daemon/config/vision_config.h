@@ -3,6 +3,7 @@
 // camera frames (daemon/include/nav/daemon/vision/vision_link.h) instead of reading the
 // registrations of a dive log (replay) or waiting for an external vision process (live).
 
+#include <optional>
 #include <string>
 
 namespace nav::daemon {
@@ -26,6 +27,9 @@ struct VisionConfig {
   /// Scene-depth prior: depth = altitude of image i, sigma = fraction * depth + floor.
   double depth_sigma_fraction = 0.1;
   double depth_sigma_floor_m = 0.2;
+  /// Registrations with an inlier of a larger leverage are refused, (0, 1]; empty: the
+  /// registration library's default (nav/vision/validation.h ValidationOptions::max_leverage).
+  std::optional<double> max_leverage;
 };
 
 }  // namespace nav::daemon

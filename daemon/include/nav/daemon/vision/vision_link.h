@@ -35,6 +35,8 @@ namespace nav::daemon::vision {
 struct AppliedAnswer {
   core::Registration registration;  ///< available_us = the data time it was applied at
   std::string reason;               ///< why success == false
+  int inliers = 0;                  ///< VisionAnswer's
+  double max_leverage = 0.0;        ///< VisionAnswer's
 };
 
 struct VisionLinkStats {

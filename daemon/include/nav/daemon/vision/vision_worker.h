@@ -55,6 +55,8 @@ struct VisionAnswer {
   std::string reason;               ///< why success == false ("" on success)
   bool expired = false;             ///< not worked on (queue full or deadline passed)
   double latency_ms = 0.0;          ///< submit() to answer, wall clock
+  int inliers = 0;                  ///< of a registration that got that far, else 0
+  double max_leverage = 0.0;        ///< its largest leverage of one inlier, else 0
 };
 
 enum class Overflow { kBlock, kExpireOldest };
