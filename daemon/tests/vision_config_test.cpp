@@ -30,6 +30,7 @@ vision:
   depth_sigma_fraction: 0.2
   depth_sigma_floor_m: 0.5
   max_leverage: 0.75
+  model_sigma_deg: 0.05
 )");
   const VisionConfig& v = c.vision;
   EXPECT_TRUE(v.enabled);
@@ -43,7 +44,9 @@ vision:
   EXPECT_EQ(v.depth_sigma_fraction, 0.2);
   EXPECT_EQ(v.depth_sigma_floor_m, 0.5);
   EXPECT_EQ(v.max_leverage, 0.75);
+  EXPECT_EQ(v.model_sigma_deg, 0.05);
   EXPECT_FALSE(parse_config(kSensors).vision.max_leverage.has_value());
+  EXPECT_FALSE(parse_config(kSensors).vision.model_sigma_deg.has_value());
 }
 
 TEST(VisionConfig, OutOfRangeAndUnknownKeysNameTheKey) {

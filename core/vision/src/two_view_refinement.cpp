@@ -288,7 +288,8 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
   }
   out.information_covariance = out.covariance_scale * J * covariance_delta * J.transpose();
   out.reliability_covariance = out.covariance_scale * J * reliability.covariance * J.transpose();
-  out.covariance = out.information_covariance + out.reliability_covariance;
+  out.covariance = out.information_covariance + out.reliability_covariance +
+                   opt.model_sigma_rad * opt.model_sigma_rad * Mat5::Identity();
   out.converged = true;
   return out;
 }

@@ -183,6 +183,24 @@ TEST(TwoViewRefinement, CovarianceEqualsDenseInverseOfFullInformation) {
   EXPECT_LT(g.dot(P * g), 1e-8 * dense.residuals.squaredNorm());
 }
 
+TEST(TwoViewRefinement, ModelErrorAddsItsVarianceToEveryAngleAndChangesNothingElse) {
+  std::mt19937 rng(8);
+  const Vec6 x = test::default_x_i_j();
+  const test::TwoViewScene s = test::make_scene(rng, x, 60, 3.5, 0.3, kSigmaPx);
+  Eigen::Matrix3d R0;
+  Eigen::Vector3d t0;
+  perturbed_initial(x, R0, t0);
+  TwoViewRefinementOptions o = options();
+  const TwoViewRefinement plain = refine_two_view(s.u_i, s.u_j, s.camera, R0, t0, o);
+  o.model_sigma_rad = 0.001;
+  const TwoViewRefinement with_model = refine_two_view(s.u_i, s.u_j, s.camera, R0, t0, o);
+  ASSERT_TRUE(plain.converged && with_model.converged) << plain.reason << with_model.reason;
+  EXPECT_EQ(with_model.z, plain.z);
+  EXPECT_EQ(with_model.information_covariance, plain.information_covariance);
+  EXPECT_LT((with_model.covariance - plain.covariance - 1e-6 * Mat5::Identity()).norm(),
+            1e-12 * plain.covariance.norm());
+}
+
 TEST(TwoViewRefinement, GrossMismatchesRejected) {
   // 10 % of the matches moved 40 px in image j across the epipolar line: they are rejected, the
   // solution is within its covariance of the truth and much closer than the plain least-squares

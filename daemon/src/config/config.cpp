@@ -133,7 +133,7 @@ SimDiveConfig parse_sim(const YamlReader& c) {
 VisionConfig parse_vision(const YamlReader& v) {
   v.expect_map({"enabled", "threads", "cache_images", "queue_capacity", "answer_delay_s",
                 "image_dir", "image_width_px", "image_height_px", "depth_sigma_fraction",
-                "depth_sigma_floor_m", "max_leverage"});
+                "depth_sigma_floor_m", "max_leverage", "model_sigma_deg"});
   VisionConfig vision;
   if (v.has("enabled")) vision.enabled = v.at("enabled").as_bool();
   v.read("threads", vision.threads, 1, 64);
@@ -149,6 +149,11 @@ VisionConfig parse_vision(const YamlReader& v) {
     double h = 1.0;
     v.read("max_leverage", h, 1e-6, 1.0);
     vision.max_leverage = h;
+  }
+  if (v.has("model_sigma_deg")) {
+    double s = 0.0;
+    v.read("model_sigma_deg", s, 0.0, 10.0);
+    vision.model_sigma_deg = s;
   }
   return vision;
 }

@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <filesystem>
+#include <numbers>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <utility>
@@ -81,6 +82,8 @@ VisionLink::VisionLink(const NavdConfig& config, std::string image_dir, Mode mod
   nav::vision::RegistrationOptions options;
   options.preprocess.bits_per_pixel = bits_per_pixel(camera.camera.pixel_format);
   if (config_.max_leverage) options.validation.max_leverage = *config_.max_leverage;
+  if (config_.model_sigma_deg)
+    options.refinement.model_sigma_rad = *config_.model_sigma_deg * std::numbers::pi / 180.0;
   registration_ = std::make_unique<nav::vision::Registration>(intrinsics, options);
   cache_ = std::make_unique<FeatureCache>(static_cast<std::size_t>(config_.cache_images));
   VisionWorkerOptions w;

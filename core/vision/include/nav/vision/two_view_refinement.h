@@ -43,6 +43,9 @@
 // C the information's inverse, A_G the matches' rank-one information columns, s_f the factor
 // above (two_view_problem.h reliability_bound). Off by default; why, with the measurements:
 // docs/performance.md, "Image registration" and "Vision in the loop".
+// Errors common to all matches (camera calibration, feature-localisation biases that do not
+// average out over the matches) bound how well any direction of z is known however many matches
+// there are; model_sigma_rad adds them as model_sigma_rad^2 I (z's five angles, radians).
 //
 // Failures (converged == false, `reason` says why and with which numbers): fewer than
 // min_points usable matches; too many matches triangulating behind either camera; median
@@ -82,6 +85,9 @@ struct TwoViewRefinementOptions {
   int reliability_group = 3;
   /// Multiply the covariance by max(1, residual_sigma_px^2 / pixel_sigma_px^2).
   bool scale_by_residual_variance = true;
+  /// Model error of z added to the covariance as sigma^2 I, rad (0: none; its choice:
+  /// docs/performance.md, "Vision in the loop").
+  double model_sigma_rad = 0.0;
 };
 
 /// Result of refine_two_view. Points, depths and pixel residuals are listed for the matches
@@ -93,7 +99,8 @@ struct TwoViewRefinement {
   /// (including after outlier rejection), otherwise kRefinementFailed.
   RegistrationFailure failure = RegistrationFailure::kOk;
   Vec5 z = Vec5::Zero();  ///< As nav::core::CameraRelativePoseModel measures it.
-  /// 5x5 covariance of z, points marginalised: information_covariance + reliability_covariance.
+  /// 5x5 covariance of z, points marginalised: information_covariance + reliability_covariance
+  /// + model_sigma_rad^2 I.
   Mat5 covariance = Mat5::Identity();
   Mat5 information_covariance = Mat5::Identity();  ///< s_f C (see above)
   Mat5 reliability_covariance = Mat5::Zero();      ///< s_f delta0^2 C A_G (...) A_G^T C

@@ -30,6 +30,9 @@ struct VisionConfig {
   /// Registrations with an inlier of a larger leverage are refused, (0, 1]; empty: the
   /// registration library's default (nav/vision/validation.h ValidationOptions::max_leverage).
   std::optional<double> max_leverage;
+  /// Model error added to every registration's covariance, deg per angle, [0, 10]; empty: the
+  /// library's (nav/vision/two_view_refinement.h TwoViewRefinementOptions::model_sigma_rad).
+  std::optional<double> model_sigma_deg;
 };
 
 }  // namespace nav::daemon
