@@ -62,7 +62,7 @@ struct EvalArgs {
   int threads = 2;
   double draw_scale = 0.5;
   double reliability_delta0 = 0.0;
-  double max_leverage = vision::ValidationOptions{}.max_leverage;
+  double max_leverage = vision::RegistrationOptions{}.validation.max_leverage;
   int fig4_every = 1;
   bool json = false;
   bool verbose = false;
@@ -418,7 +418,7 @@ void add_register_eval(CLI::App& app) {
       ->check(CLI::Range(0.0, 100.0));
   cmd->add_option("--max-leverage", args->max_leverage,
                   "refuse registrations with an inlier of a larger leverage (validation.h; "
-                  "default: the library's)")
+                  "default 0.95: registration.h)")
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--fig4-every", args->fig4_every,
                   "count the Fig. 4 band misses on every k-th pair only (default 1: all)")

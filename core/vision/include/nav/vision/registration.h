@@ -40,13 +40,20 @@ struct RegistrationOptions {
   /// Refinement. Its pure-rotation floor is EssentialOptions::min_parallax_px (0.25 px) rather
   /// than 3 sigma: slow survey pairs (Sparus consecutive frames, median derotated parallax
   /// ~0.6 px) still measure the rotation well, and their weakly observed baseline direction
-  /// shows in the 5x5 covariance instead of a rejection.
+  /// shows in the 5x5 covariance instead of a rejection. A model error of 0.05 deg per angle.
   TwoViewRefinementOptions refinement = [] {
     TwoViewRefinementOptions o;
     o.min_parallax_sigma = EssentialOptions{}.min_parallax_px / o.pixel_sigma_px;
+    o.model_sigma_rad = 0.05 * 3.14159265358979323846 / 180.0;
     return o;
   }();
-  ValidationOptions validation;
+  /// Validation; registrations with an inlier of leverage above 0.95 are refused. Both choices,
+  /// measured in navd's closed loop: docs/performance.md, "Vision in the loop".
+  ValidationOptions validation = [] {
+    ValidationOptions o;
+    o.max_leverage = 0.95;
+    return o;
+  }();
   /// Inliers whose derotated parallax (pixels) is below this are not handed to the refinement:
   /// their depth is unobservable (information near singular, sign of the depth undetermined).
   double min_point_parallax_px = 0.5;

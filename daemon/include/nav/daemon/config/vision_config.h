@@ -28,10 +28,10 @@ struct VisionConfig {
   double depth_sigma_fraction = 0.1;
   double depth_sigma_floor_m = 0.2;
   /// Registrations with an inlier of a larger leverage are refused, (0, 1]; empty: the
-  /// registration library's default (nav/vision/validation.h ValidationOptions::max_leverage).
+  /// registration pipeline's default (nav/vision/registration.h RegistrationOptions).
   std::optional<double> max_leverage;
   /// Model error added to every registration's covariance, deg per angle, [0, 10]; empty: the
-  /// library's (nav/vision/two_view_refinement.h TwoViewRefinementOptions::model_sigma_rad).
+  /// registration pipeline's default (nav/vision/registration.h RegistrationOptions).
   std::optional<double> model_sigma_deg;
 };
 
