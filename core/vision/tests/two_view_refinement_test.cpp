@@ -48,6 +48,23 @@ TwoViewRefinementOptions options() {
   return o;
 }
 
+/// A scene of n matches (generator seeded by seed) around the default pose, refined from the
+/// perturbed start with options o.
+struct RefinedScene {
+  test::TwoViewScene scene;
+  TwoViewRefinement refinement;
+};
+RefinedScene refine_scene(unsigned seed, int n, const TwoViewRefinementOptions& o) {
+  std::mt19937 rng(seed);
+  const Vec6 x = test::default_x_i_j();
+  RefinedScene out{test::make_scene(rng, x, n, 3.5, 0.3, kSigmaPx), {}};
+  Eigen::Matrix3d R0;
+  Eigen::Vector3d t0;
+  perturbed_initial(x, R0, t0);
+  out.refinement = refine_two_view(out.scene.u_i, out.scene.u_j, out.scene.camera, R0, t0, o);
+  return out;
+}
+
 double nees(const Vec5& z, const Mat5& covariance, const Vec5& z_true) {
   const Vec5 e = z_minus(z, z_true);
   return e.dot(covariance.ldlt().solve(e));
@@ -154,15 +171,11 @@ TEST(TwoViewRefinement, CovarianceMatchesMonteCarloNeesDescending) {
 TEST(TwoViewRefinement, CovarianceEqualsDenseInverseOfFullInformation) {
   // Independent reference: central-difference Jacobian of the whitened residuals with
   // respect to [z; all points], H = J^T J, dense inverse, top-left 5x5.
-  std::mt19937 rng(3);
-  const Vec6 x = test::default_x_i_j();
-  const test::TwoViewScene s = test::make_scene(rng, x, 30, 3.5, 0.3, kSigmaPx);
-  Eigen::Matrix3d R0;
-  Eigen::Vector3d t0;
-  perturbed_initial(x, R0, t0);
   TwoViewRefinementOptions o = options();
   o.huber_threshold_sigma = 1e9;  // plain least squares: every weight 1
-  const TwoViewRefinement r = refine_two_view(s.u_i, s.u_j, s.camera, R0, t0, o);
+  const RefinedScene solved = refine_scene(3, 30, o);
+  const test::TwoViewScene& s = solved.scene;
+  const TwoViewRefinement& r = solved.refinement;
   ASSERT_TRUE(r.converged) << r.reason;
   const int n = static_cast<int>(r.points_i.size());
   const test::DenseTwoView dense = test::dense_two_view(r, s, kSigmaPx);
@@ -184,16 +197,10 @@ TEST(TwoViewRefinement, CovarianceEqualsDenseInverseOfFullInformation) {
 }
 
 TEST(TwoViewRefinement, ModelErrorAddsItsVarianceToEveryAngleAndChangesNothingElse) {
-  std::mt19937 rng(8);
-  const Vec6 x = test::default_x_i_j();
-  const test::TwoViewScene s = test::make_scene(rng, x, 60, 3.5, 0.3, kSigmaPx);
-  Eigen::Matrix3d R0;
-  Eigen::Vector3d t0;
-  perturbed_initial(x, R0, t0);
   TwoViewRefinementOptions o = options();
-  const TwoViewRefinement plain = refine_two_view(s.u_i, s.u_j, s.camera, R0, t0, o);
+  const TwoViewRefinement plain = refine_scene(8, 60, o).refinement;
   o.model_sigma_rad = 0.001;
-  const TwoViewRefinement with_model = refine_two_view(s.u_i, s.u_j, s.camera, R0, t0, o);
+  const TwoViewRefinement with_model = refine_scene(8, 60, o).refinement;
   ASSERT_TRUE(plain.converged && with_model.converged) << plain.reason << with_model.reason;
   EXPECT_EQ(with_model.z, plain.z);
   EXPECT_EQ(with_model.information_covariance, plain.information_covariance);

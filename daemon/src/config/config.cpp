@@ -2,7 +2,9 @@
 // Schema in config.h and config/README.md.
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
+#include <string_view>
 
 #include "config_sections.h"
 
@@ -145,16 +147,14 @@ VisionConfig parse_vision(const YamlReader& v) {
   v.read("image_height_px", vision.image_height_px, 0, 100000);
   v.read("depth_sigma_fraction", vision.depth_sigma_fraction, 0.0, 10.0);
   v.read("depth_sigma_floor_m", vision.depth_sigma_floor_m, 0.0, 1000.0);
-  if (v.has("max_leverage")) {
-    double h = 1.0;
-    v.read("max_leverage", h, 1e-6, 1.0);
-    vision.max_leverage = h;
-  }
-  if (v.has("model_sigma_deg")) {
-    double s = 0.0;
-    v.read("model_sigma_deg", s, 0.0, 10.0);
-    vision.model_sigma_deg = s;
-  }
+  // Keys whose absence leaves the registration pipeline's default.
+  const auto read_optional = [&v](std::string_view key, double lo, double hi) {
+    double value = lo;
+    v.read(key, value, lo, hi);
+    return v.has(key) ? std::optional<double>(value) : std::nullopt;
+  };
+  vision.max_leverage = read_optional("max_leverage", 1e-6, 1.0);
+  vision.model_sigma_deg = read_optional("model_sigma_deg", 0.0, 10.0);
   return vision;
 }
 

@@ -132,22 +132,20 @@ VisionAnswer VisionWorker::work(const Item& item) {
   if (!fj->ok) return failure(item, fj->error, false);
   const nav::vision::RegistrationResult result =
       registration_.register_pair(fi->features, fj->features, r.prior ? &*r.prior : nullptr);
-  if (!result.success) {
-    VisionAnswer answer = failure(item, pair_name(r) + ": " + result.reason, false);
-    answer.inliers = result.inliers;
-    answer.max_leverage = result.max_leverage;
-    return answer;
-  }
   VisionAnswer answer;
+  if (!result.success) {
+    answer = failure(item, pair_name(r) + ": " + result.reason, false);
+  } else {
+    answer.request = r;
+    answer.registration.frame_id_i = static_cast<std::int64_t>(r.frame_i);
+    answer.registration.frame_id_j = static_cast<std::int64_t>(r.frame_j);
+    answer.registration.success = true;
+    answer.registration.z = result.z;
+    answer.registration.covariance = result.covariance;
+    answer.latency_ms = ms_since(item.submitted);
+  }
   answer.inliers = result.inliers;
   answer.max_leverage = result.max_leverage;
-  answer.request = r;
-  answer.registration.frame_id_i = static_cast<std::int64_t>(r.frame_i);
-  answer.registration.frame_id_j = static_cast<std::int64_t>(r.frame_j);
-  answer.registration.success = true;
-  answer.registration.z = result.z;
-  answer.registration.covariance = result.covariance;
-  answer.latency_ms = ms_since(item.submitted);
   return answer;
 }
 

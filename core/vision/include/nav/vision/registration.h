@@ -17,6 +17,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <numbers>
 #include <vector>
 
 #include "nav/core/status.h"
@@ -44,7 +45,7 @@ struct RegistrationOptions {
   TwoViewRefinementOptions refinement = [] {
     TwoViewRefinementOptions o;
     o.min_parallax_sigma = EssentialOptions{}.min_parallax_px / o.pixel_sigma_px;
-    o.model_sigma_rad = 0.05 * 3.14159265358979323846 / 180.0;
+    o.model_sigma_rad = 0.05 * std::numbers::pi / 180.0;
     return o;
   }();
   /// Validation; registrations with an inlier of leverage above 0.95 are refused. Both choices,
