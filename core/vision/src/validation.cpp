@@ -3,6 +3,7 @@
 #include "nav/vision/validation.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -72,6 +73,8 @@ std::string failure_name(RegistrationFailure failure) {
       return "reprojection error";
     case RegistrationFailure::kDepthOutOfPrior:
       return "depth out of prior";
+    case RegistrationFailure::kTooUncertain:
+      return "too uncertain";
   }
   return "unknown failure " + std::to_string(static_cast<int>(failure));
 }
@@ -89,7 +92,7 @@ void validate_registration(const TwoViewRefinement& refinement, const RelativePo
   result.max_leverage = refinement.max_leverage;
   std::ostringstream why;
 
-  // 1-4: the refinement itself.
+  // 1-5: the refinement itself.
   if (!refinement.converged) {
     const RegistrationFailure f = refinement.failure == RegistrationFailure::kOk
                                       ? RegistrationFailure::kRefinementFailed
@@ -116,6 +119,19 @@ void validate_registration(const TwoViewRefinement& refinement, const RelativePo
     set_failure(result, RegistrationFailure::kTooFewInliers, why.str());
     return;
   }
+  Eigen::Index widest = 0;
+  const double widest_sigma = refinement.covariance.diagonal().cwiseSqrt().maxCoeff(&widest);
+  if (!(widest_sigma <= options.max_sigma_rad) && result.inliers < options.uncertain_min_inliers) {
+    constexpr std::array<const char*, 5> kAngles = {"azimuth", "elevation", "roll", "pitch",
+                                                    "heading"};
+    constexpr double kDeg = 180.0 / std::numbers::pi;
+    why << "the " << kAngles[static_cast<std::size_t>(widest)] << " sigma " << widest_sigma * kDeg
+        << " deg is above the " << options.max_sigma_rad * kDeg
+        << " deg a measurement of fewer than " << options.uncertain_min_inliers
+        << " inliers may have (" << result.inliers << " inliers)";
+    set_failure(result, RegistrationFailure::kTooUncertain, why.str());
+    return;
+  }
   if (!(refinement.reprojection_rms_px <= options.max_reprojection_rms_px)) {
     why << "reprojection RMS " << refinement.reprojection_rms_px << " px above the limit "
         << options.max_reprojection_rms_px << " px";
@@ -134,7 +150,7 @@ void validate_registration(const TwoViewRefinement& refinement, const RelativePo
   }
   if (prior == nullptr) return;
 
-  // 5: depths against the scene-depth prior, in metres via the prior's baseline length.
+  // 6: depths against the scene-depth prior, in metres via the prior's baseline length.
   const Eigen::Vector3d t = prior->x_i_j.head<3>();
   const double baseline_m = t.norm();
   PredictedZ predicted;
@@ -167,7 +183,7 @@ void validate_registration(const TwoViewRefinement& refinement, const RelativePo
     return;
   }
 
-  // 6: chi2 of z against the prior's prediction, reported, gated on request.
+  // 7: chi2 of z against the prior's prediction, reported, gated on request.
   try {
     result.prior_chi2 = z_chi2(refinement.z, refinement.covariance, predicted);
   } catch (const std::invalid_argument& e) {

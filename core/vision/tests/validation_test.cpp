@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <iostream>
 #include <random>
 #include <stdexcept>
@@ -233,7 +234,49 @@ TEST(Validation, AMatchThatDecidesAPoseDirectionAloneFails) {
   EXPECT_NE(result.failure, RegistrationFailure::kTooFewInliers) << result.reason;
 }
 
+TEST(Validation, ARegistrationTooUncertainToBeAMeasurementFails) {
+  // The same geometry seen through 14 matches instead of 200: wider sigmas. A limit between
+  // the two widest sigmas passes the strong registration and refuses the weak one, naming the
+  // widest angle, unless the weak one has uncertain_min_inliers inliers.
+  std::mt19937 rng(7);
+  const Vec6 x = test::default_x_i_j();
+  const TwoViewRefinement strong = refined(rng, x, 200);
+  const TwoViewRefinement weak = refined(rng, x, 14);
+  ASSERT_TRUE(strong.converged && weak.converged) << strong.reason << weak.reason;
+  Eigen::Index widest = 0;
+  const double sigma_weak = weak.covariance.diagonal().cwiseSqrt().maxCoeff(&widest);
+  const double sigma_strong = strong.covariance.diagonal().cwiseSqrt().maxCoeff();
+  ASSERT_GT(sigma_weak, 2.0 * sigma_strong);
+  const char* names[] = {"azimuth", "elevation", "roll", "pitch", "heading"};
+
+  const RelativePosePrior prior = prior_at(x);
+  ValidationOptions limit;
+  limit.max_sigma_rad = std::sqrt(sigma_weak * sigma_strong);
+  RegistrationResult result;
+  validate_registration(strong, &prior, limit, result);
+  EXPECT_TRUE(result.success) << result.reason;
+  validate_registration(weak, &prior, limit, result);
+  EXPECT_FALSE(result.success);
+  EXPECT_EQ(result.failure, RegistrationFailure::kTooUncertain);
+  EXPECT_TRUE(contains(result.reason, std::string("the ") + names[widest] + " sigma"))
+      << result.reason;
+  EXPECT_TRUE(contains(result.reason, "(" + std::to_string(weak.used_matches.size()) + " inliers)"))
+      << result.reason;
+  EXPECT_TRUE(contains(result.reason, "fewer than")) << result.reason;
+  const int weak_inliers = static_cast<int>(weak.used_matches.size());
+  limit.uncertain_min_inliers = weak_inliers + 1;
+  validate_registration(weak, &prior, limit, result);
+  EXPECT_EQ(result.failure, RegistrationFailure::kTooUncertain) << result.reason;
+  limit.uncertain_min_inliers = weak_inliers;
+  validate_registration(weak, &prior, limit, result);
+  EXPECT_NE(result.failure, RegistrationFailure::kTooUncertain) << result.reason;
+  // Without a limit (the struct's default) the weak registration passes this check.
+  validate_registration(weak, &prior, ValidationOptions{}, result);
+  EXPECT_NE(result.failure, RegistrationFailure::kTooUncertain) << result.reason;
+}
+
 TEST(Validation, FailureNames) {
+  EXPECT_EQ(failure_name(RegistrationFailure::kTooUncertain), "too uncertain");
   EXPECT_EQ(failure_name(RegistrationFailure::kDepthOutOfPrior), "depth out of prior");
   EXPECT_EQ(failure_name(RegistrationFailure::kOk), "ok");
 }

@@ -13,20 +13,26 @@
 //      match's share of the information in the pose direction it informs): near 1, that match
 //      decides a direction of the pose alone, so a mismatch there bends the pose until its own
 //      residual vanishes and no residual test can see it      -> kTooFewInliers;
-//   3. reprojection RMS <= max_reprojection_rms_px            -> kReprojectionError;
-//   4. every point in front of both cameras                   -> kRefinementFailed;
-//   5. with a prior: its baseline has a defined azimuth (else there is neither a depth scale
+//   3. an answer with an angle of z whose standard deviation (covariance, model error
+//      included) exceeds max_sigma_rad needs at least uncertain_min_inliers inliers: a weakly
+//      determined pose from few matches is where a set of mismatches fits as well as the truth,
+//      while with many matches a wide sigma is the honest uncertainty of a short baseline
+//                                                             -> kTooUncertain;
+//   4. reprojection RMS <= max_reprojection_rms_px            -> kReprojectionError;
+//   5. every point in front of both cameras                   -> kRefinementFailed;
+//   6. with a prior: its baseline has a defined azimuth (else there is neither a depth scale
 //      nor a prediction of z)                                 -> kRefinementFailed;
 //      the triangulated depths, scaled to metres by the prior's baseline length |t_prior|,
 //      lie within the scene-depth prior, |d_k - d_prior| <= k sigma_k with
 //        sigma_k^2 = sigma_d^2 + (d_k / |t_prior|)^2 sigma_|t|^2
 //      (sigma_|t| the prior's baseline-length sigma, first order): the median depth must pass
 //      and at most max_fraction_depth_outliers of the points may fail -> kDepthOutOfPrior;
-//   6. with a prior: chi2 of z against the prior's prediction (relative_pose_5dof.h z_chi2)
+//   7. with a prior: chi2 of z against the prior's prediction (relative_pose_5dof.h z_chi2)
 //      is always reported in prior_chi2; it fails only when gate_prior_chi2 is set and it
 //      exceeds chi2_5^-1(prior_chi2_confidence)              -> kRefinementFailed.
 // A failure sets success = false, the failure code and a reason with the numbers; success keeps
 // failure = kOk and an empty reason. Pure functions; thread-safe.
+#include <limits>
 #include <string>
 
 #include "nav/vision/two_view_refinement.h"
@@ -40,6 +46,11 @@ struct ValidationOptions {
   /// Largest leverage of one match (in (0, 1]; 1 accepts all). Its choice, measured:
   /// docs/performance.md, "Image registration".
   double max_leverage = 1.0;
+  /// Largest standard deviation of one angle of z, radians (infinity accepts all). Its choice,
+  /// measured: docs/performance.md, "Vision in the loop".
+  double max_sigma_rad = std::numeric_limits<double>::infinity();
+  /// Inliers an answer needs when an angle's sigma exceeds max_sigma_rad (check 3).
+  int uncertain_min_inliers = std::numeric_limits<int>::max();
   double max_reprojection_rms_px = 1.5;
   double depth_k_sigma = 3.0;
   double max_fraction_depth_outliers = 0.2;
@@ -57,7 +68,7 @@ double chi2_5_quantile(double p);
 
 /// Fills success/failure/reason, z, covariance, inliers, reprojection_rms_px and prior_chi2 of
 /// `result` from `refinement` (the other counters are the caller's). `prior` may be nullptr:
-/// then checks 5 and 6 are skipped and prior_chi2 stays -1.
+/// then checks 6 and 7 are skipped and prior_chi2 stays -1.
 void validate_registration(const TwoViewRefinement& refinement, const RelativePosePrior* prior,
                            const ValidationOptions& options, RegistrationResult& result);
 

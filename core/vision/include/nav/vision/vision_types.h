@@ -96,6 +96,7 @@ enum class RegistrationFailure : std::uint8_t {
   kRefinementFailed,   ///< Refinement did not converge or its information is singular.
   kReprojectionError,  ///< Inlier reprojection RMS above the limit.
   kDepthOutOfPrior,    ///< Triangulated depths outside the scene-depth prior.
+  kTooUncertain,       ///< An angle's sigma above the limit with too few inliers to trust.
 };
 
 /// The answer for one pair: the 5-DOF measurement of nav::core::CameraRelativePoseModel
