@@ -62,7 +62,9 @@ struct EvalArgs {
   int threads = 2;
   double draw_scale = 0.5;
   double reliability_delta0 = 0.0;
-  double max_leverage = vision::RegistrationOptions{}.validation.max_leverage;
+  vision::ValidationOptions validation = vision::RegistrationOptions{}.validation;
+  double max_sigma_deg = validation.max_sigma_rad * kDeg;
+  double model_sigma_deg = vision::RegistrationOptions{}.refinement.model_sigma_rad * kDeg;
   int fig4_every = 1;
   bool json = false;
   bool verbose = false;
@@ -329,7 +331,9 @@ void run_register_eval(const EvalArgs& args) {
   vision::RegistrationOptions options;
   options.preprocess.bits_per_pixel = dive.bits_per_pixel;
   options.refinement.reliability_delta0 = args.reliability_delta0;
-  options.validation.max_leverage = args.max_leverage;
+  options.validation = args.validation;
+  options.validation.max_sigma_rad = args.max_sigma_deg / kDeg;
+  options.refinement.model_sigma_rad = args.model_sigma_deg / kDeg;
   const vision::Registration registration(dive.camera, options);
   const int n = static_cast<int>(dive.frames.size());
   std::vector<vision::ImageFeatures> features(static_cast<std::size_t>(n));
@@ -416,10 +420,25 @@ void add_register_eval(CLI::App& app) {
                   "add to each covariance the shift of undetectable blunders of this "
                   "non-centrality (two_view_refinement.h; 4.13: Baarda's; default 0: off)")
       ->check(CLI::Range(0.0, 100.0));
-  cmd->add_option("--max-leverage", args->max_leverage,
+  cmd->add_option("--max-leverage", args->validation.max_leverage,
                   "refuse registrations with an inlier of a larger leverage (validation.h; "
-                  "default 0.95: registration.h)")
+                  "default: registration.h)")
       ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--min-inliers", args->validation.min_inliers,
+                  "refuse registrations with fewer inliers (default: registration.h)")
+      ->check(CLI::Range(5, 100000));
+  cmd->add_option("--max-sigma-deg", args->max_sigma_deg,
+                  "refuse registrations with an angle of a larger sigma and few inliers, deg "
+                  "(default: registration.h)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--uncertain-min-inliers", args->validation.uncertain_min_inliers,
+                  "inliers a registration needs when an angle's sigma is above --max-sigma-deg "
+                  "(default: registration.h)")
+      ->check(CLI::Range(5, 100000));
+  cmd->add_option("--model-sigma-deg", args->model_sigma_deg,
+                  "model error added to every covariance, deg per angle (default: "
+                  "registration.h)")
+      ->check(CLI::Range(0.0, 10.0));
   cmd->add_option("--fig4-every", args->fig4_every,
                   "count the Fig. 4 band misses on every k-th pair only (default 1: all)")
       ->check(CLI::Range(1, 1000000));

@@ -31,6 +31,9 @@ vision:
   depth_sigma_floor_m: 0.5
   max_leverage: 0.75
   model_sigma_deg: 0.05
+  min_inliers: 25
+  max_sigma_deg: 1.5
+  uncertain_min_inliers: 80
 )");
   const VisionConfig& v = c.vision;
   EXPECT_TRUE(v.enabled);
@@ -45,8 +48,15 @@ vision:
   EXPECT_EQ(v.depth_sigma_floor_m, 0.5);
   EXPECT_EQ(v.max_leverage, 0.75);
   EXPECT_EQ(v.model_sigma_deg, 0.05);
-  EXPECT_FALSE(parse_config(kSensors).vision.max_leverage.has_value());
-  EXPECT_FALSE(parse_config(kSensors).vision.model_sigma_deg.has_value());
+  EXPECT_EQ(v.min_inliers, 25);
+  EXPECT_EQ(v.max_sigma_deg, 1.5);
+  EXPECT_EQ(v.uncertain_min_inliers, 80);
+  const VisionConfig defaults = parse_config(kSensors).vision;
+  EXPECT_FALSE(defaults.max_leverage.has_value());
+  EXPECT_FALSE(defaults.model_sigma_deg.has_value());
+  EXPECT_FALSE(defaults.min_inliers.has_value());
+  EXPECT_FALSE(defaults.max_sigma_deg.has_value());
+  EXPECT_FALSE(defaults.uncertain_min_inliers.has_value());
 }
 
 TEST(VisionConfig, OutOfRangeAndUnknownKeysNameTheKey) {
@@ -61,6 +71,12 @@ TEST(VisionConfig, OutOfRangeAndUnknownKeysNameTheKey) {
     FAIL() << "leverage 1.5 accepted";
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("vision.max_leverage"), std::string::npos) << e.what();
+  }
+  try {
+    parse_config(kSensors + "vision: {min_inliers: 2}\n", "t.yaml");
+    FAIL() << "min_inliers 2 accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("vision.min_inliers"), std::string::npos) << e.what();
   }
   try {
     parse_config(kSensors + "vision: {thread: 2}\n", "t.yaml");

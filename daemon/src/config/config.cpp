@@ -135,7 +135,8 @@ SimDiveConfig parse_sim(const YamlReader& c) {
 VisionConfig parse_vision(const YamlReader& v) {
   v.expect_map({"enabled", "threads", "cache_images", "queue_capacity", "answer_delay_s",
                 "image_dir", "image_width_px", "image_height_px", "depth_sigma_fraction",
-                "depth_sigma_floor_m", "max_leverage", "model_sigma_deg"});
+                "depth_sigma_floor_m", "max_leverage", "model_sigma_deg", "min_inliers",
+                "max_sigma_deg", "uncertain_min_inliers"});
   VisionConfig vision;
   if (v.has("enabled")) vision.enabled = v.at("enabled").as_bool();
   v.read("threads", vision.threads, 1, 64);
@@ -148,13 +149,16 @@ VisionConfig parse_vision(const YamlReader& v) {
   v.read("depth_sigma_fraction", vision.depth_sigma_fraction, 0.0, 10.0);
   v.read("depth_sigma_floor_m", vision.depth_sigma_floor_m, 0.0, 1000.0);
   // Keys whose absence leaves the registration pipeline's default.
-  const auto read_optional = [&v](std::string_view key, double lo, double hi) {
-    double value = lo;
+  const auto read_optional = [&v]<typename T>(std::string_view key, T lo, T hi) {
+    T value = lo;
     v.read(key, value, lo, hi);
-    return v.has(key) ? std::optional<double>(value) : std::nullopt;
+    return v.has(key) ? std::optional<T>(value) : std::nullopt;
   };
   vision.max_leverage = read_optional("max_leverage", 1e-6, 1.0);
   vision.model_sigma_deg = read_optional("model_sigma_deg", 0.0, 10.0);
+  vision.min_inliers = read_optional("min_inliers", 5, 100000);
+  vision.max_sigma_deg = read_optional("max_sigma_deg", 1e-3, 180.0);
+  vision.uncertain_min_inliers = read_optional("uncertain_min_inliers", 5, 100000);
   return vision;
 }
 

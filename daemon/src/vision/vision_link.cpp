@@ -82,8 +82,12 @@ VisionLink::VisionLink(const NavdConfig& config, std::string image_dir, Mode mod
   nav::vision::RegistrationOptions options;
   options.preprocess.bits_per_pixel = bits_per_pixel(camera.camera.pixel_format);
   if (config_.max_leverage) options.validation.max_leverage = *config_.max_leverage;
-  if (config_.model_sigma_deg)
-    options.refinement.model_sigma_rad = *config_.model_sigma_deg * std::numbers::pi / 180.0;
+  constexpr double kRad = std::numbers::pi / 180.0;
+  if (config_.model_sigma_deg) options.refinement.model_sigma_rad = *config_.model_sigma_deg * kRad;
+  if (config_.min_inliers) options.validation.min_inliers = *config_.min_inliers;
+  if (config_.max_sigma_deg) options.validation.max_sigma_rad = *config_.max_sigma_deg * kRad;
+  if (config_.uncertain_min_inliers)
+    options.validation.uncertain_min_inliers = *config_.uncertain_min_inliers;
   registration_ = std::make_unique<nav::vision::Registration>(intrinsics, options);
   cache_ = std::make_unique<FeatureCache>(static_cast<std::size_t>(config_.cache_images));
   VisionWorkerOptions w;

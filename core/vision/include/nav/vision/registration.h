@@ -41,18 +41,23 @@ struct RegistrationOptions {
   /// Refinement. Its pure-rotation floor is EssentialOptions::min_parallax_px (0.25 px) rather
   /// than 3 sigma: slow survey pairs (Sparus consecutive frames, median derotated parallax
   /// ~0.6 px) still measure the rotation well, and their weakly observed baseline direction
-  /// shows in the 5x5 covariance instead of a rejection. A model error of 0.05 deg per angle.
+  /// shows in the 5x5 covariance instead of a rejection. A model error of 0.2 deg per angle.
   TwoViewRefinementOptions refinement = [] {
     TwoViewRefinementOptions o;
     o.min_parallax_sigma = EssentialOptions{}.min_parallax_px / o.pixel_sigma_px;
-    o.model_sigma_rad = 0.05 * std::numbers::pi / 180.0;
+    o.model_sigma_rad = 0.2 * std::numbers::pi / 180.0;
     return o;
   }();
-  /// Validation; registrations with an inlier of leverage above 0.95 are refused. Both choices,
-  /// measured in navd's closed loop: docs/performance.md, "Vision in the loop".
+  /// Validation: at least 20 inliers, none of leverage above 0.85, and 100 inliers for an
+  /// answer with an angle's sigma above 1.5 deg. These and the model error were chosen by
+  /// measurements in navd's closed loop and on the Sparus frames: docs/performance.md,
+  /// "Vision in the loop".
   ValidationOptions validation = [] {
     ValidationOptions o;
-    o.max_leverage = 0.95;
+    o.min_inliers = 20;
+    o.max_leverage = 0.85;
+    o.max_sigma_rad = 1.5 * std::numbers::pi / 180.0;
+    o.uncertain_min_inliers = 100;
     return o;
   }();
   /// Inliers whose derotated parallax (pixels) is below this are not handed to the refinement:

@@ -33,6 +33,11 @@ struct VisionConfig {
   /// Model error added to every registration's covariance, deg per angle, [0, 10]; empty: the
   /// registration pipeline's default (nav/vision/registration.h RegistrationOptions).
   std::optional<double> model_sigma_deg;
+  /// Registrations with fewer inliers are refused, and those with an angle of a larger sigma
+  /// (deg) unless they have uncertain_min_inliers; empty: the registration pipeline's defaults.
+  std::optional<int> min_inliers;
+  std::optional<double> max_sigma_deg;
+  std::optional<int> uncertain_min_inliers;
 };
 
 }  // namespace nav::daemon
