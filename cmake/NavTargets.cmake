@@ -29,10 +29,13 @@ function(nav_add_tests)
     add_executable(${test_target} ${source})
     target_link_libraries(${test_target} PRIVATE ${ARG_LIBRARY} nav_test_support ${ARG_LINK}
                                                  GTest::gtest GTest::gmock GTest::gtest_main)
-    # NAV_SOURCE_DIR: the checkout, for files the tests read from it (config/, CAN tables);
-    # __FILE__ is not usable for that (compiler launchers such as ccache may make it relative).
-    target_compile_definitions(${test_target} PRIVATE NAV_SOURCE_DIR="${CMAKE_SOURCE_DIR}"
-                                                      ${ARG_DEFINITIONS})
+    # NAV_SOURCE_DIR, NAV_DATA_DIR, NAVTOOL_PATH, NAVD_PATH: functions of the test support
+    # (nav/testing/paths.h), not definitions, so the objects do not depend on the checkout's path.
+    target_compile_options(${test_target} PRIVATE
+      -include ${PROJECT_SOURCE_DIR}/core/tests/support/nav/testing/paths.h)
+    if(ARG_DEFINITIONS)
+      target_compile_definitions(${test_target} PRIVATE ${ARG_DEFINITIONS})
+    endif()
     if(ARG_DEPENDS)
       add_dependencies(${test_target} ${ARG_DEPENDS})
     endif()

@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <string>
 
+#include "nav/testing/paths.h"
+
 namespace nav::testing {
 
 /// Absolute path of `relative` (e.g. "dvl/RDI_withBT.000") inside the data folder; the file
