@@ -18,6 +18,7 @@
 #include "nav/daemon/log/dive_log.h"
 #include "nav/daemon/replay/dive_replay.h"
 #include "nav/daemon/replay/replay_summary.h"
+#include "nav/daemon/vision/vision_link.h"
 #include "nav/report/metrics.h"
 #include "nav/report/replay_data.h"
 #include "navtool/commands.h"
@@ -64,9 +65,6 @@ void write_vision_answers(const daemon::ReplayRun& run, const std::filesystem::p
   if (!out) throw CommandError("replay: cannot write " + path.string());
 }
 
-/// --vision with a config whose pairs do not wait long enough: wait one sim.yaml image period.
-constexpr double kVisionWaitS = 8.0;
-
 void run_replay_command(const ReplayArgs& args) {
   namespace fs = std::filesystem;
   const fs::path input(args.input);
@@ -78,14 +76,7 @@ void run_replay_command(const ReplayArgs& args) {
   if (!fs::exists(log)) throw CommandError("replay: no dive log at " + log.string());
   try {
     daemon::NavdConfig config = daemon::load_config_file(config_path.string());
-    if (args.vision) {
-      config.vision.enabled = true;
-      // A dive log's config replays complete tables (registration_wait_s 0); the vision stage
-      // answers at data time image + answer_delay_s, so pairs must wait past that.
-      if (config.filter.registration_wait_s <= config.vision.answer_delay_s) {
-        config.filter.registration_wait_s = kVisionWaitS;
-      }
-    }
+    if (args.vision) daemon::vision::enable_vision_in_replay(config);
     daemon::ReplayOptions options;
     options.speed = args.speed;
     options.as_fast_as_possible = args.as_fast_as_possible;

@@ -1,11 +1,14 @@
 // navtool survey [--config config/sim.yaml] [--as-fast-as-possible | --speed X] [--out DIR]
-//                [--images N] [--seed S] [--checkpoints] [--lcm-url URL]
+//                [--images N] [--seed S] [--vision] [--checkpoints] [--lcm-url URL]
 // The simulated survey end to end: the dive of the config's `sim` section is simulated into
 // sim.dive_dir when missing or simulated with other options (survey/survey_dive.h), replayed
 // through navd's replay mode (nav/daemon/service/replay_mode.h: the same source, time ordering,
 // NavFilter and LCM publishers as `navd --replay`), and with --out the replay output directory
-// and the report (metrics.json, the paper's figures; report/report.h) are written there. The
-// replay's JSON summary goes to stdout; the last line on stderr says where the report is.
+// and the report (metrics.json, the paper's figures; report/report.h) are written there.
+// --vision (or vision.enabled in the config): the whole visual pipeline: the dive is simulated
+// with rendered frames and navd registers them itself (vision/vision_link.h) instead of
+// reading the simulator's oracle. The replay's JSON summary goes to stdout; the last line on
+// stderr says where the report is.
 // LCM: the config's URL (config/sim.yaml: udpm with ttl=0); a host without a multicast route
 // falls back to memq:// with a warning naming the fix, unless --lcm-url asked for the URL.
 // SIGTERM/SIGINT stop the simulation or the replay (STOPPING=1); the report of a stopped replay
@@ -26,6 +29,7 @@
 #include "nav/daemon/service/replay_mode.h"
 #include "nav/daemon/system/sd_notify.h"
 #include "nav/daemon/system/stop_signals.h"
+#include "nav/daemon/vision/vision_link.h"
 #include "nav/report/report.h"
 #include "navtool/commands.h"
 #include "navtool/survey/survey_dive.h"
@@ -37,6 +41,7 @@ struct SurveyArgs {
   std::string config_path = "config/sim.yaml";
   std::optional<int> images;         ///< overrides sim.images
   std::optional<std::int64_t> seed;  ///< overrides sim.seed
+  bool vision = false;               ///< render the frames and register them in navd
   double speed = 1.0;
   bool as_fast_as_possible = false;
   std::string out_dir;  ///< replay outputs and report; none without it
@@ -78,6 +83,7 @@ void run_survey(const SurveyArgs& args) {
     }
     // udpm (config/sim.yaml) on a host without a multicast route: memq with a warning, unless
     // the URL was asked for with --lcm-url (nav/daemon/service/lcm_url.h).
+    if (args.vision || config.vision.enabled) daemon::vision::enable_vision_in_replay(config);
     config.lcm.url = daemon::service::usable_lcm_url(
         args.lcm_url.empty() ? config.lcm.url : args.lcm_url, args.lcm_url.empty());
   } catch (const daemon::ConfigError& e) {
@@ -91,7 +97,7 @@ void run_survey(const SurveyArgs& args) {
   const daemon::SdNotifier notifier;
   std::optional<std::string> log;
   try {
-    log = ensure_sim_dive(sim, args.config_path, signals, notifier);
+    log = ensure_sim_dive(sim, config.vision.enabled, args.config_path, signals, notifier);
   } catch (const daemon::ConfigError& e) {
     throw CommandError(std::string("survey: configuration: ") + e.what(), 2);
   } catch (const std::invalid_argument& e) {
@@ -144,6 +150,10 @@ void add_survey(CLI::App& app) {
       ->check(CLI::Range(2, 100000));
   cmd->add_option("--seed", args->seed, "seed of the simulated dive (overrides sim.seed)")
       ->check(CLI::Range(std::int64_t{0}, std::int64_t{2147483647}));
+  cmd->add_flag("--vision", args->vision,
+                "the whole visual pipeline: simulate the dive with rendered frames and let "
+                "navd register them (config vision.enabled; filter.registration_wait_s raised "
+                "to 8 s if not above vision.answer_delay_s) instead of the simulator's oracle");
   auto* speed = cmd->add_option("--speed", args->speed, "replay speed, x real time")
                     ->check(CLI::PositiveNumber);
   cmd->add_flag("--as-fast-as-possible", args->as_fast_as_possible, "replay without pacing")

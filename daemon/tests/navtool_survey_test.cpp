@@ -205,6 +205,32 @@ TEST(NavtoolSurvey, ImagesOptionOtherThanTheCachedDiveSimulatesAgain) {
   EXPECT_EQ(json::parse(second.out())["images"].get<int>(), 8);
 }
 
+TEST(NavtoolSurvey, VisionRendersTheFramesRegistersThemAndADiveWithFramesIsReused) {
+  constexpr int kImages = 6;
+  const SimDir sim(kImages);
+  SurveyProcess plain({"--config", sim.config().string(), "--as-fast-as-possible"});
+  ASSERT_EQ(plain.wait_exit(std::chrono::seconds(60)), 0) << plain.err();
+  EXPECT_FALSE(std::filesystem::exists(sim.dive() / "images"));
+  SurveyProcess visual({"--config", sim.config().string(), "--vision", "--as-fast-as-possible"});
+  ASSERT_EQ(visual.wait_exit(std::chrono::seconds(300)), 0) << visual.err();
+  EXPECT_NE(visual.err().find("simulated without frames"), std::string::npos) << visual.err();
+  int frames = 0;
+  for (const auto& e : std::filesystem::directory_iterator(sim.dive() / "images")) {
+    frames += e.path().extension() == ".png" ? 1 : 0;
+  }
+  EXPECT_GE(frames, kImages);
+  const json j = json::parse(visual.out());
+  EXPECT_EQ(j["error"].get<std::string>(), "");
+  ASSERT_TRUE(j["vision"].is_object()) << visual.out();  // navd's own stage answered
+  EXPECT_GT(j["vision"]["answered"].get<int>(), 0);
+  EXPECT_GT(j["vision"]["succeeded"].get<int>(), 0) << j["vision"]["last_failure"];
+  EXPECT_GT(j["links_accepted"].get<int>(), 0);
+  // The rendered dive serves a run without vision too: no new simulation.
+  SurveyProcess again({"--config", sim.config().string(), "--as-fast-as-possible"});
+  ASSERT_EQ(again.wait_exit(std::chrono::seconds(60)), 0) << again.err();
+  EXPECT_NE(again.err().find("reusing the simulated dive"), std::string::npos) << again.err();
+}
+
 TEST(NavtoolSurvey, ConfigWithoutSimSectionIsAConfigurationError) {
   const SimDir sim(6);
   std::string yaml = slurp(sim.config());

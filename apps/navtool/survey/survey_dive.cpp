@@ -20,7 +20,8 @@ namespace fs = std::filesystem;
 struct SimulationStopped {};  ///< thrown from the progress callback on a stop signal
 
 /// Why the cached dive in `dir` cannot be used ("" if it can): missing files or other options.
-std::string cache_mismatch(const daemon::SimDiveConfig& sim, const fs::path& dir) {
+std::string cache_mismatch(const daemon::SimDiveConfig& sim, bool render_images,
+                           const fs::path& dir) {
   if (!fs::exists(dir / "dive.lcmlog")) return (dir / "dive.lcmlog").string() + " missing";
   std::ifstream in(dir / "sim.json");
   if (!in) return (dir / "sim.json").string() + " missing (simulation not finished)";
@@ -36,18 +37,23 @@ std::string cache_mismatch(const daemon::SimDiveConfig& sim, const fs::path& dir
            o.value("images", nlohmann::json()).dump() + ", outlier_rate " +
            o.value("outlier_rate", nlohmann::json()).dump() + ", not the config's";
   }
+  if (render_images && !o.value("render_images", false)) {
+    return (dir / "sim.json").string() + ": simulated without frames, and --vision needs them";
+  }
   return {};
 }
 
 /// Runs simulate_dive on a thread while this one watches the stop signals and the watchdog;
 /// false if stopped.
-bool simulate(const daemon::SimDiveConfig& sim, const std::string& config_path,
-              const sigset_t& stop_signals, const daemon::SdNotifier& notifier) {
+bool simulate(const daemon::SimDiveConfig& sim, bool render_images,
+              const std::string& config_path, const sigset_t& stop_signals,
+              const daemon::SdNotifier& notifier) {
   sim::SimOptions options;
   options.out_dir = sim.dive_dir;
   options.seed = static_cast<std::uint64_t>(sim.seed);
   options.mission.images = sim.images;
   options.oracle.outlier_rate = sim.outlier_rate;
+  options.render_images = render_images;
   std::atomic<bool> stop{false}, done{false};
   int last_tenth = -1;
   options.progress = [&](double fraction) {
@@ -97,22 +103,23 @@ std::string sim_dive_identity(const daemon::SimDiveConfig& sim) {
          nlohmann::json(sim.outlier_rate).dump();
 }
 
-std::optional<std::string> ensure_sim_dive(const daemon::SimDiveConfig& sim,
+std::optional<std::string> ensure_sim_dive(const daemon::SimDiveConfig& sim, bool render_images,
                                            const std::string& config_path,
                                            const sigset_t& stop_signals,
                                            const daemon::SdNotifier& notifier) {
   const fs::path dir(sim.dive_dir);
   const std::string log_path = (dir / "dive.lcmlog").string();
-  const std::string mismatch = cache_mismatch(sim, dir);
+  const std::string mismatch = cache_mismatch(sim, render_images, dir);
   if (mismatch.empty()) {
     spdlog::info("navtool survey: reusing the simulated dive {}", sim.dive_dir);
     return log_path;
   }
-  spdlog::info("navtool survey: simulating the dive {} (seed {}, {} images): {}", sim.dive_dir,
-               sim.seed, sim.images, mismatch);
+  spdlog::info("navtool survey: simulating the dive {} (seed {}, {} images{}): {}",
+               sim.dive_dir, sim.seed, sim.images, render_images ? ", rendering the frames" : "",
+               mismatch);
   notifier.status("simulating " + sim.dive_dir);
   fs::remove(dir / "sim.json");  // a dive interrupted from here on is never reused
-  if (!simulate(sim, config_path, stop_signals, notifier)) return std::nullopt;
+  if (!simulate(sim, render_images, config_path, stop_signals, notifier)) return std::nullopt;
   return log_path;
 }
 

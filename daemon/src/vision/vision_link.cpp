@@ -34,6 +34,13 @@ nav::vision::CameraIntrinsics vision_camera(const CameraConfig& camera,
   return c;
 }
 
+void enable_vision_in_replay(NavdConfig& config) {
+  config.vision.enabled = true;
+  if (config.filter.registration_wait_s <= config.vision.answer_delay_s) {
+    config.filter.registration_wait_s = kReplayVisionWaitS;
+  }
+}
+
 int bits_per_pixel(PixelFormat format) {
   switch (format) {
     case PixelFormat::kMono12:

@@ -53,6 +53,13 @@ int bits_per_pixel(PixelFormat format);
 /// Reads `dir`/frame_png_name(frame_id) unchanged; throws std::runtime_error naming the file.
 cv::Mat load_frame(const std::string& dir, std::uint64_t frame_id);
 
+/// The replay switch of `navtool replay --vision` and `navtool survey --vision`: sets
+/// vision.enabled and, when filter.registration_wait_s does not exceed vision.answer_delay_s
+/// (a dive log's config replays complete tables with a wait of 0, while the vision stage
+/// answers at data time image + answer_delay_s), raises the wait to kReplayVisionWaitS.
+inline constexpr double kReplayVisionWaitS = 8.0;  ///< one image period of config/sim.yaml
+void enable_vision_in_replay(NavdConfig& config);
+
 class VisionLink {
  public:
   enum class Mode { kReplay, kLive };
