@@ -81,9 +81,9 @@ void run_survey(const SurveyArgs& args) {
                                 "no `sim` section: navtool survey needs the simulated dive's "
                                 "dive_dir, seed and images (config/sim.yaml)");
     }
+    if (args.vision || config.vision.enabled) daemon::vision::enable_vision_in_replay(config);
     // udpm (config/sim.yaml) on a host without a multicast route: memq with a warning, unless
     // the URL was asked for with --lcm-url (nav/daemon/service/lcm_url.h).
-    if (args.vision || config.vision.enabled) daemon::vision::enable_vision_in_replay(config);
     config.lcm.url = daemon::service::usable_lcm_url(
         args.lcm_url.empty() ? config.lcm.url : args.lcm_url, args.lcm_url.empty());
   } catch (const daemon::ConfigError& e) {
