@@ -38,7 +38,8 @@ std::string cache_mismatch(const daemon::SimDiveConfig& sim, bool render_images,
            o.value("outlier_rate", nlohmann::json()).dump() + ", not the config's";
   }
   if (render_images && !o.value("render_images", false)) {
-    return (dir / "sim.json").string() + ": simulated without frames, and --vision needs them";
+    return (dir / "sim.json").string() +
+           ": simulated without frames, which the vision stage needs";
   }
   return {};
 }
