@@ -5,6 +5,7 @@
 // overlap, and none beyond the camera's range.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <variant>
@@ -131,6 +132,33 @@ TEST(SimRender, TextureIsFilteredByThePixelFootprint) {
   EXPECT_NEAR(mean_cm, mean_point, 0.01);
   EXPECT_NEAR(mean_far, 0.35, 1e-12);  // the octaves' mean, no relief
   EXPECT_LT(var_far, 1e-12);
+}
+
+TEST(SimRender, WallsAreTexturedInTheirOwnPlaneAndFloorsKeepThePlanarTexture) {
+  const Seafloor floor({-20.0, 20.0, -20.0, 20.0}, 0.0, 200.0, {}, 1);
+  const Renderer r(CameraGeometry{}, floor, RenderOptions{}, 3);
+  const core::Vec3 up(0.0, 0.0, -1.0), wall_normal(1.0, 0.0, 0.0);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> at(-10.0, 10.0);
+  double wall_sum = 0.0, wall_sum2 = 0.0, floor_sum = 0.0, floor_sum2 = 0.0;
+  constexpr int kN = 2000;
+  for (int k = 0; k < kN; ++k) {
+    const core::Vec3 q(at(rng), at(rng), 200.0 + at(rng));
+    EXPECT_EQ(r.albedo(q, up, 0.0, 0.0), r.albedo(q.x(), q.y(), 0.0, 0.0)) << "a level floor";
+    // Down a wall (normal along x) the planar texture would be constant: a vertical streak.
+    const double a = r.albedo(q, wall_normal, 0.0, 0.0);
+    const double below = r.albedo(q + core::Vec3(0.0, 0.0, 0.5), wall_normal, 0.0, 0.0);
+    wall_sum += a - below;
+    wall_sum2 += (a - below) * (a - below);
+    const double across = r.albedo(q.x(), q.y(), 0.0, 0.0) - r.albedo(q.x(), q.y() + 0.5, 0.0, 0.0);
+    floor_sum += across;
+    floor_sum2 += across * across;
+  }
+  const double wall_var = wall_sum2 / kN - std::pow(wall_sum / kN, 2);
+  const double floor_var = floor_sum2 / kN - std::pow(floor_sum / kN, 2);
+  // Half a metre down the wall the albedo changes as much as half a metre across the floor.
+  EXPECT_GT(wall_var, 0.5 * floor_var);
+  EXPECT_LT(wall_var, 2.0 * floor_var);
 }
 
 TEST(SimRender, VisibleOverlapOfAFlatFloorIsTheFootprintOverlapWithinRange) {

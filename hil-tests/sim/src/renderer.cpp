@@ -62,6 +62,32 @@ double Renderer::albedo(double x_m, double y_m, double relief_m, double footprin
   return std::clamp(a, 0.05, 1.0);
 }
 
+double Renderer::albedo(const core::Vec3& q_m, const core::Vec3& normal, double relief_m,
+                        double footprint_m) const {
+  // Triplanar mapping (Geiss, GPU Gems 3, ch. 1.5): the planar texture projected along each
+  // axis, blended by the normal's components to the 4th power. A floor or a deck (normal
+  // vertical) has the planar texture of albedo(x, y) exactly; a wall gets its own texture in
+  // its plane instead of the floor's smeared down it in vertical streaks. Each projection gets
+  // its own offset so the wall's texture is not the floor's rotated.
+  const core::Vec3 w = normal.cwiseAbs().array().pow(4.0).matrix();
+  struct Projection {
+    double weight, u_m, v_m;
+  };
+  const Projection projections[] = {
+      {w.z(), q_m.x(), q_m.y()}, {w.x(), q_m.y() + 517.0, q_m.z()}, {w.y(), q_m.x() - 733.0, q_m.z()}};
+  // A projection of less than 5 % of the weights is skipped (slopes under ~25 deg: the planar
+  // texture alone, one noise evaluation per pixel over rough relief; a level floor: exactly
+  // albedo(x, y)).
+  constexpr double kNegligible = 0.05;
+  double a = 0.0, kept = 0.0;
+  for (const Projection& p : projections) {
+    if (p.weight <= kNegligible * w.sum()) continue;
+    a += p.weight * albedo(p.u_m, p.v_m, relief_m, footprint_m);
+    kept += p.weight;
+  }
+  return a / kept;
+}
+
 cv::Mat Renderer::backscatter(const core::Vec3& p_cam, const core::Mat3& R_world_cam,
                               const core::Vec3& p_strobe, double range_m, double exposure) const {
   // Single scattering along each ray (isotropic phase function, Jaffe 1990): the light the
@@ -231,8 +257,7 @@ cv::Mat Renderer::render(const core::Vec12& x, std::uint64_t frame_seed, double*
       const double footprint_m =
           r_cam / (camera_.fx_px * std::max(0.2, std::abs(n.dot(d)) / d.norm()));
       const double cos2 = cos_axis * cos_axis;
-      const double a =
-          albedo(q.x(), q.y(), seafloor_->relief_height_m(q.x(), q.y()), footprint_m);
+      const double a = albedo(q, n, seafloor_->relief_height_m(q.x(), q.y()), footprint_m);
       row[u] += static_cast<float>(a *
                                    lambert /
                                    (r_strobe * r_strobe) *

@@ -39,6 +39,11 @@ class Renderer {
   /// (Seafloor::relief_height_m), averaged over a pixel footprint of footprint_m (0: the
   /// point's own): a property of the point and the pixel's size, not of the camera's pose.
   double albedo(double x_m, double y_m, double relief_m, double footprint_m = 0.0) const;
+  /// Albedo of the surface point q_m (world NED, m) of unit normal `normal`: the planar texture
+  /// above projected onto the surface by triplanar mapping, so walls are textured in their own
+  /// plane. Equal to albedo(q.x, q.y, ...) where the normal is vertical.
+  double albedo(const core::Vec3& q_m, const core::Vec3& normal, double relief_m,
+                double footprint_m) const;
   /// The first point of the ray p_world + t d_world (t > 0, d_world.z > 0: looking down) on the
   /// height field, as render() finds each pixel's (world NED, m).
   core::Vec3 surface_point(const core::Vec3& p_world, const core::Vec3& d_world) const;
@@ -46,6 +51,7 @@ class Renderer {
   /// ray with d.z <= 0.05 (near or above the horizon).
   std::vector<core::Vec3> surface_points(const core::Vec3& p_world,
                                          const std::vector<core::Vec3>& d_world) const;
+  const RenderOptions& options() const { return options_; }
   /// 8-bit thumbnail (width thumbnail_width_px, aspect kept) of a 12-bit frame.
   cv::Mat thumbnail(const cv::Mat& frame) const;
 
