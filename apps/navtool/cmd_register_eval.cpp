@@ -1,12 +1,16 @@
 // navtool register-eval: registers the rendered frames of a simulated dive (`navtool simulate
-// --render-images`) against the truth: every pair of the first --frames frames that see at least
-// --min-overlap of the same surface (nav/sim/visible_footprint.h; --flat-overlap: of the flat
-// footprints at the depth below each camera), with a prior from the truth plus a stated
-// covariance (register_eval.h), multi-threaded over frames and pairs.
-//   navtool register-eval DIVE [--frames N] [--min-overlap F] [--flat-overlap] [--threads T]
-//                          [--reliability DELTA0] [--max-leverage H] [--json]
+// --render-images`) against the truth: every pair of the first --frames frames whose images show
+// at least --min-overlap of the same lit surface (nav/sim/visible_footprint.h;
+// --min-relative-return: how lit; --overlap-of-footprint: of the smaller lit footprint instead of
+// the image; --flat-overlap: of the flat footprints at the depth below each camera), with a prior
+// from the truth plus a stated covariance (register_eval.h), multi-threaded over frames and pairs.
+//   navtool register-eval DIVE [--frames N] [--min-overlap F] [--flat-overlap]
+//                          [--min-relative-return R] [--overlap-of-footprint] [--threads T]
+//                          [--reliability DELTA0] [--max-leverage H] [--pixel-sigma-px S]
+//                          [--model-sigma-deg D] [--json]
 //                          [--draw OUT.png] [--draw-scale S]
-// --json prints one object: frames, min_overlap, overlap ("visible" or "flat"), pairs,
+// --json prints one object: frames, min_overlap, overlap ("visible" or "flat"),
+// min_relative_return, overlap_of ("image" or "footprint"), pairs,
 // successes, success_fraction,
 // median_rotation_error_deg, median_baseline_direction_error_deg, nees_mean, nees_median,
 // wrong (NEES > chi2_5^-1(0.999)), wrong_fraction (of the successes), failures {reason: count},
@@ -59,12 +63,14 @@ struct EvalArgs {
   int frames = 320;
   double min_overlap = 0.3;
   bool flat_overlap = false;
+  sim::VisibleFootprintOptions visible;
   int threads = 2;
   double draw_scale = 0.5;
   double reliability_delta0 = 0.0;
   vision::ValidationOptions validation = vision::RegistrationOptions{}.validation;
   double max_sigma_deg = validation.max_sigma_rad * kDeg;
   double model_sigma_deg = vision::RegistrationOptions{}.refinement.model_sigma_rad * kDeg;
+  double pixel_sigma_px = vision::RegistrationOptions{}.refinement.pixel_sigma_px;
   int fig4_every = 1;
   bool json = false;
   bool verbose = false;
@@ -200,7 +206,8 @@ cv::Mat read_frame(const Frame& f) {
   return m;
 }
 
-std::vector<PairTruth> overlapping_pairs(const Dive& dive, double min_overlap, bool flat) {
+std::vector<PairTruth> overlapping_pairs(const Dive& dive, double min_overlap, bool flat,
+                                        const sim::VisibleFootprintOptions& visible) {
   std::vector<PairTruth> pairs;
   for (std::size_t j = 1; j < dive.frames.size(); ++j) {
     for (std::size_t i = 0; i < j; ++i) {
@@ -209,7 +216,7 @@ std::vector<PairTruth> overlapping_pairs(const Dive& dive, double min_overlap, b
           flat ? (a.footprint.empty() || b.footprint.empty()
                       ? 0.0
                       : sim::RegistrationOracle::overlap_fraction(a.footprint, b.footprint))
-               : sim::visible_overlap(a.visible, b.visible, dive.geometry);
+               : sim::visible_overlap(a.visible, b.visible, dive.geometry, visible);
       if (overlap < min_overlap) continue;
       PairTruth t;
       t.i = static_cast<int>(i);
@@ -256,6 +263,8 @@ json summarise(const EvalArgs& args, const Dive& dive, const std::vector<PairTru
       {"frames", dive.frames.size()},
       {"min_overlap", args.min_overlap},
       {"overlap", args.flat_overlap ? "flat" : "visible"},
+      {"min_relative_return", args.visible.min_relative_return},
+      {"overlap_of", args.visible.of_image ? "image" : "footprint"},
       {"pairs", pairs.size()},
       {"successes", nees.size()},
       {"success_fraction", pairs.empty() ? 0.0 : n_ok / static_cast<double>(pairs.size())},
@@ -334,6 +343,8 @@ void run_register_eval(const EvalArgs& args) {
   options.validation = args.validation;
   options.validation.max_sigma_rad = args.max_sigma_deg / kDeg;
   options.refinement.model_sigma_rad = args.model_sigma_deg / kDeg;
+  options.refinement.min_parallax_sigma *= options.refinement.pixel_sigma_px / args.pixel_sigma_px;
+  options.refinement.pixel_sigma_px = args.pixel_sigma_px;  // the same floor in pixels
   const vision::Registration registration(dive.camera, options);
   const int n = static_cast<int>(dive.frames.size());
   std::vector<vision::ImageFeatures> features(static_cast<std::size_t>(n));
@@ -351,7 +362,7 @@ void run_register_eval(const EvalArgs& args) {
   for (const auto& e : errors)
     if (!e.empty()) throw CommandError("register-eval: " + e);
 
-  const std::vector<PairTruth> pairs = overlapping_pairs(dive, args.min_overlap, args.flat_overlap);
+  const std::vector<PairTruth> pairs = overlapping_pairs(dive, args.min_overlap, args.flat_overlap, args.visible);
   std::vector<PairEval> evals(pairs.size());
   std::vector<double> pair_cpu_ms(pairs.size());
   parallel_for(static_cast<int>(pairs.size()), args.threads, [&](int k) {
@@ -411,6 +422,14 @@ void add_register_eval(CLI::App& app) {
   cmd->add_flag("--flat-overlap", args->flat_overlap,
                 "overlap of the flat footprints at the depth below each camera instead of the "
                 "surface both frames see (nav/sim/visible_footprint.h)");
+  cmd->add_option("--min-relative-return", args->visible.min_relative_return,
+                  "surface lit less than this fraction of a frame's metered return is not in its "
+                  "visible footprint (nav/sim/visible_footprint.h; default 1/15, 0: the 8 m range "
+                  "alone)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_flag("--overlap-of-footprint", [args](std::int64_t) { args->visible.of_image = false; },
+                "visible overlap as a fraction of the smaller lit footprint instead of the image "
+                "(nav/sim/visible_footprint.h)");
   cmd->add_option("--threads", args->threads, "worker threads (default 2)")
       ->check(CLI::Range(1, 64));
   cmd->add_option("--prior-sigma-m", args->pair.prior_position_sigma_m,
@@ -439,6 +458,10 @@ void add_register_eval(CLI::App& app) {
                   "model error added to every covariance, deg per angle (default: "
                   "registration.h)")
       ->check(CLI::Range(0.0, 10.0));
+  cmd->add_option("--pixel-sigma-px", args->pixel_sigma_px,
+                  "feature noise of the two-view refinement, px, and the floor of its "
+                  "a-posteriori scaling (default: registration.h)")
+      ->check(CLI::Range(0.01, 10.0));
   cmd->add_option("--fig4-every", args->fig4_every,
                   "count the Fig. 4 band misses on every k-th pair only (default 1: all)")
       ->check(CLI::Range(1, 1000000));

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <variant>
@@ -182,6 +183,39 @@ TEST(SimRender, VisibleOverlapOfAFlatFloorIsTheFootprintOverlapWithinRange) {
       EXPECT_EQ(visible, 0.0) << "the floor is beyond the camera's range";
     }
   }
+}
+
+TEST(SimRender, FootprintIsLitSurfaceAndOverlapIsAFractionOfTheImage) {
+  const Seafloor floor({-30.0, 30.0, -30.0, 30.0}, 0.0, 300.0, {}, 1);
+  const CameraGeometry cam = pinhole(1000.0, 1280, 1024);
+  const Renderer renderer(cam, floor, RenderOptions{}, 1);
+  core::Vec6 x = core::Vec6::Zero();
+  x[2] = floor.depth_m(0.0, 0.0) - 4.0;  // 4 m above the floor
+  VisibleFootprint f = visible_footprint(renderer, cam, x);
+  const core::Vec3 below = x.head<3>() + core::Vec3(0.0, 0.0, 4.0);
+  const core::Vec3 far = x.head<3>() + core::Vec3(0.0, 0.0, 7.9);  // within 8 m, 1/28 as lit
+  VisibleFootprintOptions range_only;
+  range_only.min_relative_return = 0.0;
+  EXPECT_TRUE(in_footprint(f, below));
+  EXPECT_FALSE(in_footprint(f, far)) << "too dark for an exposure metered on the floor at 4 m";
+  EXPECT_TRUE(in_footprint(f, far, range_only));
+  EXPECT_FALSE(in_footprint(f, x.head<3>() + core::Vec3(0.0, 0.0, 8.1), range_only));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(in_footprint(f, core::Vec3(nan, nan, nan), range_only)) << "a ray that met nothing";
+
+  // Only the top quarter of the rows meets the floor (haze below): that sliver is all of its
+  // footprint but a quarter of its image.
+  for (int r = f.rows / 4; r < f.rows; ++r)
+    for (int c = 0; c < f.cols; ++c) {
+      f.points_world[static_cast<std::size_t>(r * f.cols + c)] = core::Vec3(nan, nan, nan);
+      f.depth_m[static_cast<std::size_t>(r * f.cols + c)] = nan;
+    }
+  VisibleFootprintOptions of_footprint;
+  of_footprint.of_image = false;
+  const double quarter = static_cast<double>(f.rows / 4) / f.rows;
+  const double of_its_footprint = seen_fraction(f, f, cam, of_footprint);
+  EXPECT_GT(of_its_footprint, 0.9);  // all but the grid's points on the image's border
+  EXPECT_NEAR(seen_fraction(f, f, cam), quarter * of_its_footprint, 1e-12);
 }
 
 }  // namespace

@@ -24,22 +24,41 @@ VisibleFootprint visible_footprint(const Renderer& renderer, const CameraGeometr
                                           1.0));
   f.points_world = renderer.surface_points(p, rays_world);
   for (const core::Vec3& q : f.points_world) f.depth_m.push_back((R.transpose() * (q - p)).z());
+  f.strobe_world = p + R * renderer.options().strobe_in_camera_m;
+  f.attenuation_per_m = renderer.options().attenuation_per_m;
+  double sum = 0.0;
+  int count = 0;
+  for (int r = f.rows / 4; r < f.rows - f.rows / 4; ++r)
+    for (int c = f.cols / 4; c < f.cols - f.cols / 4; ++c, ++count) {
+      const double rho = relative_return(f, f.points_world[static_cast<std::size_t>(r * f.cols + c)]);
+      if (std::isfinite(rho)) sum += rho;
+    }
+  f.metered_return = count > 0 ? sum / count : 0.0;
   return f;
+}
+
+double relative_return(const VisibleFootprint& f, const core::Vec3& q_world) {
+  const double r_s = (q_world - f.strobe_world).norm();
+  const double r_c = (q_world - f.x_world_camera.head<3>()).norm();
+  return std::exp(-f.attenuation_per_m * (r_s + r_c)) / std::max(r_s * r_s, 1e-6);
+}
+
+bool in_footprint(const VisibleFootprint& f, const core::Vec3& q_world,
+                  const VisibleFootprintOptions& options) {
+  // Comparisons with NaN (a ray that met nothing) are false.
+  return (q_world - f.x_world_camera.head<3>()).norm() <= options.max_range_m &&
+         relative_return(f, q_world) >= options.min_relative_return * f.metered_return;
 }
 
 double seen_fraction(const VisibleFootprint& a, const VisibleFootprint& b,
                      const CameraGeometry& camera, const VisibleFootprintOptions& options) {
-  const core::Vec3 p_a = a.x_world_camera.head<3>();
-  const auto in_range = [&](const core::Vec3& q, const core::Vec3& p) {
-    return (q - p).norm() <= options.max_range_m;  // false for NaN (a ray that met nothing)
-  };
   const core::Mat3 R_b = core::rotation_from_euler(b.x_world_camera.tail<3>());
   const core::Vec3 p_b = b.x_world_camera.head<3>();
   int seen = 0, footprint = 0;
   for (const core::Vec3& q : a.points_world) {
-    if (!in_range(q, p_a)) continue;
+    if (!in_footprint(a, q, options)) continue;
     ++footprint;
-    if (!in_range(q, p_b)) continue;
+    if (!in_footprint(b, q, options)) continue;
     const core::Vec3 x = R_b.transpose() * (q - p_b);
     if (x.z() <= 0.0) continue;
     const double u = camera.fx_px * x.x() / x.z() + camera.cx_px;
@@ -53,7 +72,8 @@ double seen_fraction(const VisibleFootprint& a, const VisibleFootprint& b,
         std::max(options.occlusion_tolerance_m, options.occlusion_tolerance_fraction * x.z());
     if (x.z() <= surface + tolerance) ++seen;
   }
-  return footprint > 0 ? static_cast<double>(seen) / footprint : 0.0;
+  const int whole = options.of_image ? static_cast<int>(a.points_world.size()) : footprint;
+  return whole > 0 ? static_cast<double>(seen) / whole : 0.0;
 }
 
 double visible_overlap(const VisibleFootprint& a, const VisibleFootprint& b,
