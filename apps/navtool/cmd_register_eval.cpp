@@ -362,7 +362,8 @@ void run_register_eval(const EvalArgs& args) {
   for (const auto& e : errors)
     if (!e.empty()) throw CommandError("register-eval: " + e);
 
-  const std::vector<PairTruth> pairs = overlapping_pairs(dive, args.min_overlap, args.flat_overlap, args.visible);
+  const std::vector<PairTruth> pairs =
+      overlapping_pairs(dive, args.min_overlap, args.flat_overlap, args.visible);
   std::vector<PairEval> evals(pairs.size());
   std::vector<double> pair_cpu_ms(pairs.size());
   parallel_for(static_cast<int>(pairs.size()), args.threads, [&](int k) {

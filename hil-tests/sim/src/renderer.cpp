@@ -73,8 +73,9 @@ double Renderer::albedo(const core::Vec3& q_m, const core::Vec3& normal, double 
   struct Projection {
     double weight, u_m, v_m;
   };
-  const Projection projections[] = {
-      {w.z(), q_m.x(), q_m.y()}, {w.x(), q_m.y() + 517.0, q_m.z()}, {w.y(), q_m.x() - 733.0, q_m.z()}};
+  const Projection projections[] = {{w.z(), q_m.x(), q_m.y()},
+                                    {w.x(), q_m.y() + 517.0, q_m.z()},
+                                    {w.y(), q_m.x() - 733.0, q_m.z()}};
   // A projection of less than 5 % of the weights is skipped (slopes under ~25 deg: the planar
   // texture alone, one noise evaluation per pixel over rough relief; a level floor: exactly
   // albedo(x, y)).

@@ -30,7 +30,8 @@ VisibleFootprint visible_footprint(const Renderer& renderer, const CameraGeometr
   int count = 0;
   for (int r = f.rows / 4; r < f.rows - f.rows / 4; ++r)
     for (int c = f.cols / 4; c < f.cols - f.cols / 4; ++c, ++count) {
-      const double rho = relative_return(f, f.points_world[static_cast<std::size_t>(r * f.cols + c)]);
+      const double rho =
+          relative_return(f, f.points_world[static_cast<std::size_t>(r * f.cols + c)]);
       if (std::isfinite(rho)) sum += rho;
     }
   f.metered_return = count > 0 ? sum / count : 0.0;

@@ -2,11 +2,12 @@
 // Renders the simulated camera's 12-bit grey frames from the seafloor height field
 // (`navtool simulate --render-images`): per pixel, the ray of the pinhole camera (config
 // intrinsics, no distortion, config mount) meets the height field (first crossing of the
-// bilinear surface by ray marching and bisection, walls included); the seafloor's albedo is a seeded multi-scale value-noise texture
-// (sediment, brighter rocks and debris tops); a strobe beside the camera lights it with
-// Lambert shading, inverse-square falloff and exponential attenuation in sea water along
-// strobe -> seafloor -> camera; backscatter of the strobe light by the water along each ray
-// (single scattering); cos^4 vignetting; shot and read noise; 12 significant bits.
+// bilinear surface by ray marching and bisection, walls included); the seafloor's albedo is a
+// seeded multi-scale value-noise texture (sediment, brighter rocks and debris tops), walls
+// textured in their own plane; a strobe beside the camera lights it with Lambert shading,
+// inverse-square falloff and exponential attenuation in sea water along strobe -> seafloor ->
+// camera; backscatter of the strobe light by the water along each ray (single scattering);
+// cos^4 vignetting; shot and read noise; 12 significant bits.
 
 #include <cstdint>
 #include <opencv2/core.hpp>
