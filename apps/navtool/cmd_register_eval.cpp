@@ -71,6 +71,7 @@ struct EvalArgs {
   double max_sigma_deg = validation.max_sigma_rad * kDeg;
   double model_sigma_deg = vision::RegistrationOptions{}.refinement.model_sigma_rad * kDeg;
   double pixel_sigma_px = vision::RegistrationOptions{}.refinement.pixel_sigma_px;
+  double residual_sigma_factor = vision::RegistrationOptions{}.refinement.residual_sigma_factor;
   int fig4_every = 1;
   bool json = false;
   bool verbose = false;
@@ -345,6 +346,7 @@ void run_register_eval(const EvalArgs& args) {
   options.refinement.model_sigma_rad = args.model_sigma_deg / kDeg;
   options.refinement.min_parallax_sigma *= options.refinement.pixel_sigma_px / args.pixel_sigma_px;
   options.refinement.pixel_sigma_px = args.pixel_sigma_px;  // the same floor in pixels
+  options.refinement.residual_sigma_factor = args.residual_sigma_factor;
   const vision::Registration registration(dive.camera, options);
   const int n = static_cast<int>(dive.frames.size());
   std::vector<vision::ImageFeatures> features(static_cast<std::size_t>(n));
@@ -463,6 +465,10 @@ void add_register_eval(CLI::App& app) {
                   "feature noise of the two-view refinement, px, and the floor of its "
                   "a-posteriori scaling (default: registration.h)")
       ->check(CLI::Range(0.01, 10.0));
+  cmd->add_option("--residual-sigma-factor", args->residual_sigma_factor,
+                  "multiplier of the fit's a-posteriori pixel sigma in the covariance's "
+                  "scaling (two_view_refinement.h; default: registration.h)")
+      ->check(CLI::Range(0.1, 10.0));
   cmd->add_option("--fig4-every", args->fig4_every,
                   "count the Fig. 4 band misses on every k-th pair only (default 1: all)")
       ->check(CLI::Range(1, 1000000));

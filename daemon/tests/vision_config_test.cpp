@@ -30,6 +30,8 @@ vision:
   depth_sigma_fraction: 0.2
   depth_sigma_floor_m: 0.5
   max_leverage: 0.75
+  pixel_sigma_px: 0.3
+  residual_sigma_factor: 1.9
   model_sigma_deg: 0.05
   min_inliers: 25
   max_sigma_deg: 1.5
@@ -47,13 +49,18 @@ vision:
   EXPECT_EQ(v.depth_sigma_fraction, 0.2);
   EXPECT_EQ(v.depth_sigma_floor_m, 0.5);
   EXPECT_EQ(v.max_leverage, 0.75);
+  EXPECT_EQ(v.pixel_sigma_px, 0.3);
+  EXPECT_EQ(v.residual_sigma_factor, 1.9);
   EXPECT_EQ(v.model_sigma_deg, 0.05);
   EXPECT_EQ(v.min_inliers, 25);
   EXPECT_EQ(v.max_sigma_deg, 1.5);
   EXPECT_EQ(v.uncertain_min_inliers, 80);
   const VisionConfig defaults = parse_config(kSensors).vision;
   EXPECT_FALSE(defaults.max_leverage.has_value());
-  EXPECT_FALSE(defaults.model_sigma_deg.has_value());
+  // The loop's noise model, not the registration pipeline's (vision_config.h).
+  EXPECT_EQ(defaults.pixel_sigma_px, 0.5);
+  EXPECT_EQ(defaults.residual_sigma_factor, 1.0);
+  EXPECT_EQ(defaults.model_sigma_deg, 0.2);
   EXPECT_FALSE(defaults.min_inliers.has_value());
   EXPECT_FALSE(defaults.max_sigma_deg.has_value());
   EXPECT_FALSE(defaults.uncertain_min_inliers.has_value());

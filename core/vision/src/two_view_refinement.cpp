@@ -283,7 +283,7 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
   J.topLeftCorner<2, 2>() = G.topLeftCorner<2, 3>() * tangent_basis(x.t);
   J.bottomRightCorner<3, 3>().setIdentity();
   if (opt.scale_by_residual_variance) {
-    const double ratio = out.residual_sigma_px / opt.pixel_sigma_px;
+    const double ratio = opt.residual_sigma_factor * out.residual_sigma_px / opt.pixel_sigma_px;
     out.covariance_scale = std::max(1.0, ratio * ratio);
   }
   out.information_covariance = out.covariance_scale * J * covariance_delta * J.transpose();

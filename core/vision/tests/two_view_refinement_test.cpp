@@ -15,6 +15,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <iostream>
@@ -194,6 +195,26 @@ TEST(TwoViewRefinement, CovarianceEqualsDenseInverseOfFullInformation) {
   // (the cost a further Gauss-Newton step would gain) is negligible against the cost.
   const Eigen::VectorXd g = J.transpose() * dense.residuals;
   EXPECT_LT(g.dot(P * g), 1e-8 * dense.residuals.squaredNorm());
+}
+
+TEST(TwoViewRefinement, ResidualSigmaFactorMultipliesTheAPosterioriSigma) {
+  // With k the covariance is the unit-k one times max(1, k^2 s_hat^2 / s^2) / max(1, s_hat^2 /
+  // s^2); z, the residual sigma and the information are unchanged.
+  TwoViewRefinementOptions o = options();
+  const TwoViewRefinement plain = refine_scene(8, 60, o).refinement;
+  o.residual_sigma_factor = 3.0;
+  const TwoViewRefinement scaled = refine_scene(8, 60, o).refinement;
+  ASSERT_TRUE(plain.converged && scaled.converged) << plain.reason << scaled.reason;
+  EXPECT_EQ(scaled.z, plain.z);
+  EXPECT_EQ(scaled.residual_sigma_px, plain.residual_sigma_px);
+  const double ratio2 = std::pow(plain.residual_sigma_px / kSigmaPx, 2);
+  const double expected = std::max(1.0, 9.0 * ratio2);
+  EXPECT_GT(expected, std::max(1.0, ratio2)) << "the scene must put k s_hat above the floor";
+  EXPECT_NEAR(scaled.covariance_scale, expected, 1e-12 * expected);
+  EXPECT_LT((scaled.information_covariance * plain.covariance_scale -
+             plain.information_covariance * expected)
+                .norm(),
+            1e-9 * (expected * plain.information_covariance.norm()));
 }
 
 TEST(TwoViewRefinement, ModelErrorAddsItsVarianceToEveryAngleAndChangesNothingElse) {

@@ -135,7 +135,8 @@ SimDiveConfig parse_sim(const YamlReader& c) {
 VisionConfig parse_vision(const YamlReader& v) {
   v.expect_map({"enabled", "threads", "cache_images", "queue_capacity", "answer_delay_s",
                 "image_dir", "image_width_px", "image_height_px", "depth_sigma_fraction",
-                "depth_sigma_floor_m", "max_leverage", "model_sigma_deg", "min_inliers",
+                "depth_sigma_floor_m", "max_leverage", "pixel_sigma_px", "residual_sigma_factor",
+                "model_sigma_deg", "min_inliers",
                 "max_sigma_deg", "uncertain_min_inliers"});
   VisionConfig vision;
   if (v.has("enabled")) vision.enabled = v.at("enabled").as_bool();
@@ -148,6 +149,9 @@ VisionConfig parse_vision(const YamlReader& v) {
   v.read("image_height_px", vision.image_height_px, 0, 100000);
   v.read("depth_sigma_fraction", vision.depth_sigma_fraction, 0.0, 10.0);
   v.read("depth_sigma_floor_m", vision.depth_sigma_floor_m, 0.0, 1000.0);
+  v.read("pixel_sigma_px", vision.pixel_sigma_px, 1e-3, 10.0);
+  v.read("residual_sigma_factor", vision.residual_sigma_factor, 0.1, 10.0);
+  v.read("model_sigma_deg", vision.model_sigma_deg, 0.0, 10.0);
   // Keys whose absence leaves the registration pipeline's default.
   const auto read_optional = [&v]<typename T>(std::string_view key, T lo, T hi) {
     T value = lo;
@@ -155,7 +159,6 @@ VisionConfig parse_vision(const YamlReader& v) {
     return v.has(key) ? std::optional<T>(value) : std::nullopt;
   };
   vision.max_leverage = read_optional("max_leverage", 1e-6, 1.0);
-  vision.model_sigma_deg = read_optional("model_sigma_deg", 0.0, 10.0);
   vision.min_inliers = read_optional("min_inliers", 5, 100000);
   vision.max_sigma_deg = read_optional("max_sigma_deg", 1e-3, 180.0);
   vision.uncertain_min_inliers = read_optional("uncertain_min_inliers", 5, 100000);

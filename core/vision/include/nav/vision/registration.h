@@ -41,17 +41,21 @@ struct RegistrationOptions {
   /// Refinement. Its pure-rotation floor is EssentialOptions::min_parallax_px (0.25 px) rather
   /// than 3 sigma: slow survey pairs (Sparus consecutive frames, median derotated parallax
   /// ~0.6 px) still measure the rotation well, and their weakly observed baseline direction
-  /// shows in the 5x5 covariance instead of a rejection. A model error of 0.2 deg per angle.
+  /// shows in the 5x5 covariance instead of a rejection. The covariance's noise model is
+  /// calibrated against rendered truth: pixel sigma 0.3 px, scaled by 1.9 x the fit's own
+  /// residual sigma where that is larger, no model error (docs/performance.md "Image
+  /// registration", "An honest covariance"). navd's closed loop sets its own, more
+  /// conservative one (nav/daemon/config/vision_config.h).
   TwoViewRefinementOptions refinement = [] {
     TwoViewRefinementOptions o;
+    o.pixel_sigma_px = 0.3;
+    o.residual_sigma_factor = 1.9;
     o.min_parallax_sigma = EssentialOptions{}.min_parallax_px / o.pixel_sigma_px;
-    o.model_sigma_rad = 0.2 * std::numbers::pi / 180.0;
     return o;
   }();
   /// Validation: at least 20 inliers, none of leverage above 0.85, and 100 inliers for an
-  /// answer with an angle's sigma above 1.5 deg. These and the model error were chosen by
-  /// measurements in navd's closed loop and on the Sparus frames: docs/performance.md,
-  /// "Vision in the loop".
+  /// answer with an angle's sigma above 1.5 deg. These were chosen by measurements in navd's
+  /// closed loop and on the Sparus frames: docs/performance.md, "Vision in the loop".
   ValidationOptions validation = [] {
     ValidationOptions o;
     o.min_inliers = 20;

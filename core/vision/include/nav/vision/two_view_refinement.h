@@ -30,9 +30,11 @@
 // 3-D points are marginalised, equal to the top-left 5x5 block of the dense inverse of the
 // information in (z, points). That covariance assumes the feature noise is pixel_sigma_px; the
 // residuals measure it: with s_hat^2 = RSS / (n - 5) (4n residuals, 3n + 5 unknowns) the
-// covariance is multiplied by max(1, s_hat^2 / s^2) (Hartley & Zisserman, section 5.1.3, the
-// a-posteriori variance factor; floored at 1 so a lucky fit of few points does not shrink it
-// below the configured localisation noise), reported in covariance_scale.
+// covariance is multiplied by max(1, k^2 s_hat^2 / s^2) (Hartley & Zisserman, section 5.1.3,
+// the a-posteriori variance factor; floored at 1 so a lucky fit of few points does not shrink
+// it below the configured localisation noise), reported in covariance_scale. k =
+// residual_sigma_factor: on rendered truth the pose errors are 1.9 times what the residuals
+// alone imply (errors the pose absorbs leave no residual), yet grow with them.
 // The information describes independent noise only: a few mismatches that agree with a nearby
 // pose leave no visible residual when they dominate a direction of the pose (few inliers on a
 // small patch). With reliability_delta0 > 0 the covariance adds Baarda's external reliability
@@ -83,8 +85,10 @@ struct TwoViewRefinementOptions {
   /// matches blundering together, for the reliability term of the covariance.
   double reliability_delta0 = 0.0;
   int reliability_group = 3;
-  /// Multiply the covariance by max(1, residual_sigma_px^2 / pixel_sigma_px^2).
+  /// Multiply the covariance by max(1, (residual_sigma_factor residual_sigma_px)^2 /
+  /// pixel_sigma_px^2) (k above).
   bool scale_by_residual_variance = true;
+  double residual_sigma_factor = 1.0;
   /// Model error of z added to the covariance as sigma^2 I, rad (0: none; its choice:
   /// docs/performance.md, "Vision in the loop").
   double model_sigma_rad = 0.0;

@@ -30,9 +30,14 @@ struct VisionConfig {
   /// Registrations with an inlier of a larger leverage are refused, (0, 1]; empty: the
   /// registration pipeline's default (nav/vision/registration.h RegistrationOptions).
   std::optional<double> max_leverage;
-  /// Model error added to every registration's covariance, deg per angle, [0, 10]; empty: the
-  /// registration pipeline's default (nav/vision/registration.h RegistrationOptions).
-  std::optional<double> model_sigma_deg;
+  /// The registrations' noise model in navd's loop: feature noise (px, (0, 10]), the factor of
+  /// the fit's residual sigma ([0.1, 10]) and a model error added to every covariance (deg per
+  /// angle, [0, 10]). More conservative than the registration pipeline's calibrated defaults
+  /// (nav/vision/registration.h): the filter's gate and the closed loop were measured with
+  /// these (docs/performance.md "Vision in the loop").
+  double pixel_sigma_px = 0.5;
+  double residual_sigma_factor = 1.0;
+  double model_sigma_deg = 0.2;
   /// Registrations with fewer inliers are refused, and those with an angle of a larger sigma
   /// (deg) unless they have uncertain_min_inliers; empty: the registration pipeline's defaults.
   std::optional<int> min_inliers;
