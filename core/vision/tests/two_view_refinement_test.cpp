@@ -17,6 +17,8 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <utility>
 #include <cstdint>
 #include <iostream>
 #include <numbers>
@@ -197,15 +199,24 @@ TEST(TwoViewRefinement, CovarianceEqualsDenseInverseOfFullInformation) {
   EXPECT_LT(g.dot(P * g), 1e-8 * dense.residuals.squaredNorm());
 }
 
+/// The same scene refined with options() and with `change` applied to them; both converged
+/// to the same z.
+std::pair<TwoViewRefinement, TwoViewRefinement> refine_before_and_after(
+    const std::function<void(TwoViewRefinementOptions&)>& change) {
+  TwoViewRefinementOptions o = options();
+  TwoViewRefinement before = refine_scene(8, 60, o).refinement;
+  change(o);
+  TwoViewRefinement after = refine_scene(8, 60, o).refinement;
+  EXPECT_TRUE(before.converged && after.converged) << before.reason << after.reason;
+  EXPECT_EQ(after.z, before.z);
+  return {std::move(before), std::move(after)};
+}
+
 TEST(TwoViewRefinement, ResidualSigmaFactorMultipliesTheAPosterioriSigma) {
   // With k the covariance is the unit-k one times max(1, k^2 s_hat^2 / s^2) / max(1, s_hat^2 /
-  // s^2); z, the residual sigma and the information are unchanged.
-  TwoViewRefinementOptions o = options();
-  const TwoViewRefinement plain = refine_scene(8, 60, o).refinement;
-  o.residual_sigma_factor = 3.0;
-  const TwoViewRefinement scaled = refine_scene(8, 60, o).refinement;
-  ASSERT_TRUE(plain.converged && scaled.converged) << plain.reason << scaled.reason;
-  EXPECT_EQ(scaled.z, plain.z);
+  // s^2); z and the residual sigma are unchanged.
+  const auto [plain, scaled] =
+      refine_before_and_after([](TwoViewRefinementOptions& o) { o.residual_sigma_factor = 3.0; });
   EXPECT_EQ(scaled.residual_sigma_px, plain.residual_sigma_px);
   const double ratio2 = std::pow(plain.residual_sigma_px / kSigmaPx, 2);
   const double expected = std::max(1.0, 9.0 * ratio2);
@@ -218,12 +229,8 @@ TEST(TwoViewRefinement, ResidualSigmaFactorMultipliesTheAPosterioriSigma) {
 }
 
 TEST(TwoViewRefinement, ModelErrorAddsItsVarianceToEveryAngleAndChangesNothingElse) {
-  TwoViewRefinementOptions o = options();
-  const TwoViewRefinement plain = refine_scene(8, 60, o).refinement;
-  o.model_sigma_rad = 0.001;
-  const TwoViewRefinement with_model = refine_scene(8, 60, o).refinement;
-  ASSERT_TRUE(plain.converged && with_model.converged) << plain.reason << with_model.reason;
-  EXPECT_EQ(with_model.z, plain.z);
+  const auto [plain, with_model] =
+      refine_before_and_after([](TwoViewRefinementOptions& o) { o.model_sigma_rad = 0.001; });
   EXPECT_EQ(with_model.information_covariance, plain.information_covariance);
   EXPECT_LT((with_model.covariance - plain.covariance - 1e-6 * Mat5::Identity()).norm(),
             1e-12 * plain.covariance.norm());
