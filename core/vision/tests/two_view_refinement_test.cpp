@@ -17,12 +17,12 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
-#include <functional>
-#include <utility>
 #include <cstdint>
+#include <functional>
 #include <iostream>
 #include <numbers>
 #include <random>
+#include <utility>
 
 #include "dense_two_view.h"
 #include "nav/core/geometry/rotation.h"

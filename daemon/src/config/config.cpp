@@ -136,8 +136,7 @@ VisionConfig parse_vision(const YamlReader& v) {
   v.expect_map({"enabled", "threads", "cache_images", "queue_capacity", "answer_delay_s",
                 "image_dir", "image_width_px", "image_height_px", "depth_sigma_fraction",
                 "depth_sigma_floor_m", "max_leverage", "pixel_sigma_px", "residual_sigma_factor",
-                "model_sigma_deg", "min_inliers",
-                "max_sigma_deg", "uncertain_min_inliers"});
+                "model_sigma_deg", "min_inliers", "max_sigma_deg", "uncertain_min_inliers"});
   VisionConfig vision;
   if (v.has("enabled")) vision.enabled = v.at("enabled").as_bool();
   v.read("threads", vision.threads, 1, 64);

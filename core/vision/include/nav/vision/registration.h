@@ -43,9 +43,9 @@ struct RegistrationOptions {
   /// ~0.6 px) still measure the rotation well, and their weakly observed baseline direction
   /// shows in the 5x5 covariance instead of a rejection. The covariance's noise model is
   /// calibrated against rendered truth: pixel sigma 0.3 px, scaled by 1.9 x the fit's own
-  /// residual sigma where that is larger, no model error (docs/performance.md "Image
-  /// registration", "An honest covariance"). navd's closed loop sets its own, more
-  /// conservative one (nav/daemon/config/vision_config.h).
+  /// residual sigma where that is larger, no model error (docs/performance.md "An honest
+  /// registration covariance"). navd's closed loop sets its own, more conservative one
+  /// (nav/daemon/config/vision_config.h).
   TwoViewRefinementOptions refinement = [] {
     TwoViewRefinementOptions o;
     o.pixel_sigma_px = 0.3;

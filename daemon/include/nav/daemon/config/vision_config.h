@@ -30,7 +30,7 @@ struct VisionConfig {
   /// Registrations with an inlier of a larger leverage are refused, (0, 1]; empty: the
   /// registration pipeline's default (nav/vision/registration.h RegistrationOptions).
   std::optional<double> max_leverage;
-  /// The registrations' noise model in navd's loop: feature noise (px, (0, 10]), the factor of
+  /// The registrations' noise model in navd's loop: feature noise (px, [0.001, 10]), the factor of
   /// the fit's residual sigma ([0.1, 10]) and a model error added to every covariance (deg per
   /// angle, [0, 10]). More conservative than the registration pipeline's calibrated defaults
   /// (nav/vision/registration.h): the filter's gate and the closed loop were measured with
