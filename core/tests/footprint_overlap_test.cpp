@@ -44,6 +44,16 @@ TEST(FootprintOverlap, RegionIsInscribedAndTight) {
   // On the x axis the boundary is at 1 − dx/4 = 0.5: dx = 2.
   EXPECT_NEAR(region[0].x(), 2.0, 1e-3);
   EXPECT_TRUE(overlap_region(half, half, kPi / 2, 0.8).empty());  // even t = 0 gives 0.75
+  // Unequal footprints at a relative heading: every vertex, bisected or mirrored through the
+  // origin, lies on the boundary of R_f from inside.
+  const FootprintHalfExtent small(1.2, 0.8);
+  const auto turned = overlap_region(half, small, 0.7, 0.3);
+  ASSERT_EQ(turned.size(), static_cast<std::size_t>(kRegionDirections));
+  for (const Eigen::Vector2d& v : turned) {
+    const double f = footprint_overlap_fraction(half, small, v, 0.7);
+    EXPECT_GE(f, 0.3) << v.transpose();
+    EXPECT_LT(f, 0.3 + 1e-3) << v.transpose();
+  }
 }
 
 TEST(FootprintOverlap, GaussianBoxProbabilityIsTheErfProduct) {

@@ -100,8 +100,12 @@ std::vector<Eigen::Vector2d> overlap_region(const FootprintHalfExtent& half_j,
     return polygon;
   }
   const double reach_m = half_j.norm() + half_i.norm();  // beyond it the footprints are apart
-  polygon.reserve(kRegionDirections);
-  for (int k = 0; k < kRegionDirections; ++k) {
+  // R_f is centrally symmetric (overlap(t) = overlap(-t), file comment): the boundary is
+  // bisected in the first half of the directions and mirrored into the second.
+  static_assert(kRegionDirections % 2 == 0, "mirrored directions need an even count");
+  constexpr int kHalf = kRegionDirections / 2;
+  polygon.resize(kRegionDirections);
+  for (int k = 0; k < kHalf; ++k) {
     const double theta = 2.0 * kPi * k / kRegionDirections;
     const Eigen::Vector2d u(std::cos(theta), std::sin(theta));
     double inside = 0.0, outside = reach_m;
@@ -111,7 +115,8 @@ std::vector<Eigen::Vector2d> overlap_region(const FootprintHalfExtent& half_j,
           footprint_overlap_fraction(half_j, half_i, mid * u, heading_j_i_rad) >= fraction;
       (in ? inside : outside) = mid;
     }
-    polygon.push_back(inside * u);
+    polygon[k] = inside * u;
+    polygon[k + kHalf] = -inside * u;
   }
   return polygon;
 }
