@@ -47,6 +47,7 @@
 #include "nav/sim/visible_footprint.h"
 #include "nav/sim/sensor_streams.h"
 #include "nav/vision/draw.h"
+#include "nav/vision/two_view_refinement.h"
 #include "nav/vision/validation.h"
 #include "navtool/commands.h"
 #include "navtool/register_eval.h"
@@ -344,8 +345,7 @@ void run_register_eval(const EvalArgs& args) {
   options.validation = args.validation;
   options.validation.max_sigma_rad = args.max_sigma_deg / kDeg;
   options.refinement.model_sigma_rad = args.model_sigma_deg / kDeg;
-  options.refinement.min_parallax_sigma *= options.refinement.pixel_sigma_px / args.pixel_sigma_px;
-  options.refinement.pixel_sigma_px = args.pixel_sigma_px;  // the same floor in pixels
+  vision::set_pixel_sigma_keeping_parallax_floor(options.refinement, args.pixel_sigma_px);
   options.refinement.residual_sigma_factor = args.residual_sigma_factor;
   const vision::Registration registration(dive.camera, options);
   const int n = static_cast<int>(dive.frames.size());

@@ -32,28 +32,28 @@ TEST(FootprintOverlap, MatchesClosedFormForAlignedRectangles) {
   EXPECT_NEAR(footprint_overlap_fraction(half, 0.5 * half, {0.3, 0.3}, 0.3), 1.0, 1e-12);
 }
 
-TEST(FootprintOverlap, RegionIsInscribedAndTight) {
-  const FootprintHalfExtent half(2.0, 1.5);
-  const auto region = overlap_region(half, half, 0.0, 0.5);
+/// Every vertex of overlap_region (bisected or mirrored through the origin) lies on the boundary
+/// of R_f from inside.
+void expect_vertices_on_the_boundary(const FootprintHalfExtent& half_j,
+                                     const FootprintHalfExtent& half_i, double heading_rad,
+                                     double fraction) {
+  const auto region = overlap_region(half_j, half_i, heading_rad, fraction);
   ASSERT_EQ(region.size(), static_cast<std::size_t>(kRegionDirections));
   for (const Eigen::Vector2d& v : region) {
-    const double f = footprint_overlap_fraction(half, half, v, 0.0);
-    EXPECT_GE(f, 0.5);
-    EXPECT_LT(f, 0.5 + 1e-3);
+    const double f = footprint_overlap_fraction(half_j, half_i, v, heading_rad);
+    EXPECT_GE(f, fraction) << v.transpose();
+    EXPECT_LT(f, fraction + 1e-3) << v.transpose();
   }
+}
+
+TEST(FootprintOverlap, RegionIsInscribedAndTight) {
+  const FootprintHalfExtent half(2.0, 1.5);
+  expect_vertices_on_the_boundary(half, half, 0.0, 0.5);
   // On the x axis the boundary is at 1 − dx/4 = 0.5: dx = 2.
-  EXPECT_NEAR(region[0].x(), 2.0, 1e-3);
+  EXPECT_NEAR(overlap_region(half, half, 0.0, 0.5)[0].x(), 2.0, 1e-3);
   EXPECT_TRUE(overlap_region(half, half, kPi / 2, 0.8).empty());  // even t = 0 gives 0.75
-  // Unequal footprints at a relative heading: every vertex, bisected or mirrored through the
-  // origin, lies on the boundary of R_f from inside.
-  const FootprintHalfExtent small(1.2, 0.8);
-  const auto turned = overlap_region(half, small, 0.7, 0.3);
-  ASSERT_EQ(turned.size(), static_cast<std::size_t>(kRegionDirections));
-  for (const Eigen::Vector2d& v : turned) {
-    const double f = footprint_overlap_fraction(half, small, v, 0.7);
-    EXPECT_GE(f, 0.3) << v.transpose();
-    EXPECT_LT(f, 0.3 + 1e-3) << v.transpose();
-  }
+  // Unequal footprints at a relative heading.
+  expect_vertices_on_the_boundary(half, FootprintHalfExtent(1.2, 0.8), 0.7, 0.3);
 }
 
 TEST(FootprintOverlap, GaussianBoxProbabilityIsTheErfProduct) {

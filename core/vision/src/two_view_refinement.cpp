@@ -50,6 +50,12 @@ double area_fraction(const std::vector<Eigen::Vector2d>& u_px, const CameraIntri
 
 }  // namespace
 
+void set_pixel_sigma_keeping_parallax_floor(TwoViewRefinementOptions& options,
+                                            double pixel_sigma_px) {
+  options.min_parallax_sigma *= options.pixel_sigma_px / pixel_sigma_px;
+  options.pixel_sigma_px = pixel_sigma_px;
+}
+
 Eigen::VectorXd two_view_residuals(const Vec5& z, const std::vector<Eigen::Vector3d>& points_i,
                                    const std::vector<Eigen::Vector2d>& u_i_px,
                                    const std::vector<Eigen::Vector2d>& u_j_px,

@@ -12,6 +12,7 @@
 #include "nav/daemon/sources/camera_source.h"
 #include "nav/daemon/vision/camera_prior.h"
 #include "nav/vision/camera_model.h"
+#include "nav/vision/two_view_refinement.h"
 
 namespace nav::daemon::vision {
 
@@ -90,10 +91,7 @@ VisionLink::VisionLink(const NavdConfig& config, std::string image_dir, Mode mod
   options.preprocess.bits_per_pixel = bits_per_pixel(camera.camera.pixel_format);
   if (config_.max_leverage) options.validation.max_leverage = *config_.max_leverage;
   constexpr double kRad = std::numbers::pi / 180.0;
-  // The same pure-rotation floor in pixels whatever the pixel sigma.
-  options.refinement.min_parallax_sigma *=
-      options.refinement.pixel_sigma_px / config_.pixel_sigma_px;
-  options.refinement.pixel_sigma_px = config_.pixel_sigma_px;
+  nav::vision::set_pixel_sigma_keeping_parallax_floor(options.refinement, config_.pixel_sigma_px);
   options.refinement.residual_sigma_factor = config_.residual_sigma_factor;
   options.refinement.model_sigma_rad = config_.model_sigma_deg * kRad;
   if (config_.min_inliers) options.validation.min_inliers = *config_.min_inliers;

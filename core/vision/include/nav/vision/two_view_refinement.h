@@ -94,6 +94,11 @@ struct TwoViewRefinementOptions {
   double model_sigma_rad = 0.0;
 };
 
+/// Sets options.pixel_sigma_px and rescales min_parallax_sigma so that the pure-rotation floor
+/// in pixels (min_parallax_sigma x pixel_sigma_px) stays where it was.
+void set_pixel_sigma_keeping_parallax_floor(TwoViewRefinementOptions& options,
+                                            double pixel_sigma_px);
+
 /// Result of refine_two_view. Points, depths and pixel residuals are listed for the matches
 /// that were used (`used_matches`, indices into the caller's match list).
 struct TwoViewRefinement {
