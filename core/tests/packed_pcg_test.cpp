@@ -81,6 +81,24 @@ TEST_P(PackedByBlockSize, MultiplyMatchesDenseProductAndFusedDots) {
   for (int c = columns; c < width; ++c) EXPECT_EQ(dots[static_cast<size_t>(c)], 0.0);
 }
 
+TEST_P(PackedByBlockSize, SpdOperatorAdapterMatchesDenseProduct) {
+  const int d = GetParam();
+  const Eigen::MatrixXd A = random_block_spd(7, d, 5);
+  const InformationMatrix lambda = to_blocks(A, d);
+  PackedBlockOperator op;
+  op.refresh(lambda);
+  std::vector<double> x_scratch, y_scratch;
+  const PackedSpdOperator adapter(op, x_scratch, y_scratch);
+  ASSERT_EQ(adapter.dim(), A.rows());
+  for (const int columns : {1, d + 1, 9}) {  // widths 8 and 16
+    const Eigen::MatrixXd X = Eigen::MatrixXd::Random(A.rows(), columns);
+    Eigen::MatrixXd Y = Eigen::MatrixXd::Constant(A.rows(), columns, -1.0);
+    adapter.multiply(X, Y);
+    const Eigen::MatrixXd expected = A * X;
+    EXPECT_LT((Y - expected).norm(), 1e-12 * expected.norm()) << columns << " columns";
+  }
+}
+
 TEST_P(PackedByBlockSize, SolveReproducesGenericPcgIterates) {
   const int d = GetParam();
   const Eigen::MatrixXd A = random_block_spd(25, d, 7);
@@ -232,6 +250,31 @@ TEST(StateRecoveryKernels, PackedAndGenericAgreeOverSteps) {
     EXPECT_LE(a.column_residual_spectral, a.column_residual_frobenius);
     EXPECT_EQ(a.refactored_blocks, step == 0 ? 40 : 1);
     lambda.add_to_block(0, 0, 0.5 * Eigen::MatrixXd::Identity(d, d));  // changes one block
+  }
+}
+
+TEST(StateRecoveryKernels, FactorPreconditionedPackedAndGenericAgree) {
+  const int d = 6;
+  InformationMatrix lambda = to_blocks(random_block_spd(30, d, 17), d);
+  const Eigen::VectorXd eta = Eigen::VectorXd::Random(lambda.dim());
+  StateRecoveryOptions packed_options, generic_options;
+  packed_options.preconditioner = generic_options.preconditioner = RecoveryPreconditioner::kFactor;
+  packed_options.refresh_interval = generic_options.refresh_interval = 3;
+  generic_options.kernel = RecoveryKernel::kGeneric;
+  StateRecovery packed(d, packed_options), generic(d, generic_options);
+  ASSERT_TRUE(packed.set_solution(Eigen::MatrixXd::Zero(lambda.dim(), d + 1)).ok());
+  ASSERT_TRUE(generic.set_solution(Eigen::MatrixXd::Zero(lambda.dim(), d + 1)).ok());
+  const Eigen::MatrixXd exact_column = lambda.to_dense().inverse().leftCols(d);
+  for (int step = 0; step < 4; ++step) {
+    const RecoveryResult a = packed.solve(lambda, eta);
+    const RecoveryResult b = generic.solve(lambda, eta);
+    ASSERT_TRUE(a.status.ok() && b.status.ok());
+    EXPECT_EQ(a.refreshed, b.refreshed);
+    EXPECT_LT((packed.solution() - generic.solution()).norm(), 1e-9 * generic.solution().norm());
+    if (step == 0) {  // Λ was factored: M = Λ, so the column is exact to rounding
+      EXPECT_LT((packed.robot_column() - exact_column).norm(), 1e-9 * exact_column.norm());
+    }
+    lambda.add_to_block(3, 3, 0.5 * Eigen::MatrixXd::Identity(d, d));  // a later link's term
   }
 }
 

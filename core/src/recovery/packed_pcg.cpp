@@ -222,6 +222,16 @@ void unpack_columns(const std::vector<double>& packed, int width, Eigen::Ref<Eig
   }
 }
 
+void PackedSpdOperator::multiply(const Eigen::Ref<const Eigen::MatrixXd>& X,
+                                 Eigen::Ref<Eigen::MatrixXd> Y) const {
+  const int width = packed_width(static_cast<int>(X.cols()));
+  pack_columns(X, width, &x_);
+  reserve_growing(y_, x_.size());
+  y_.resize(x_.size());
+  A_.multiply(x_.data(), y_.data(), width);
+  unpack_columns(y_, width, Y);
+}
+
 Eigen::MatrixXd packed_gram(const double* A, Eigen::Index rows, int width, int first,
                             int count) {
   std::vector<double> gram(static_cast<size_t>(width) * static_cast<size_t>(width));

@@ -262,7 +262,13 @@ RecoveryResult StateRecovery::solve_factor(const InformationMatrix& lambda,
   }
   result.status = factor_.update_trailing(lambda);
   if (!result.status.ok()) return result;
-  result = solve_with(InformationOperator(lambda), factor_, eta);
+  if (options_.kernel == RecoveryKernel::kPacked) {
+    packed_operator_.refresh(lambda);
+    result = solve_with(PackedSpdOperator(packed_operator_, packed_rhs_, packed_solution_),
+                        factor_, eta);
+  } else {
+    result = solve_with(InformationOperator(lambda), factor_, eta);
+  }
   result.refactored_blocks = static_cast<int>((lambda.dim() - factor_.factored_dim()) / block_dim_);
   result.refreshed = refresh;
   ++solves_since_refresh_;

@@ -74,6 +74,25 @@ class PackedBlockOperator {
   std::vector<const double*> data_;  // d x d column-major values of each stored block
 };
 
+/// The packed product behind pcg.h's column-major SpdOperator: packs X, multiplies with the tile
+/// kernels, unpacks Y (O(n·width) copies beside the block products). For preconditioners that
+/// work on column-major matrices (factor_preconditioner.h). The scratch vectors belong to the
+/// caller (reused across solves); operator and scratch must outlive the solve.
+class PackedSpdOperator final : public SpdOperator {
+ public:
+  PackedSpdOperator(const PackedBlockOperator& A, std::vector<double>& x_scratch,
+                    std::vector<double>& y_scratch)
+      : A_(A), x_(x_scratch), y_(y_scratch) {}
+  Eigen::Index dim() const override { return A_.dim(); }
+  void multiply(const Eigen::Ref<const Eigen::MatrixXd>& X,
+                Eigen::Ref<Eigen::MatrixXd> Y) const override;
+
+ private:
+  const PackedBlockOperator& A_;
+  std::vector<double>& x_;
+  std::vector<double>& y_;
+};
+
 /// Block-Jacobi preconditioner on packed matrices with incremental refactorisation.
 class PackedBlockJacobi {
  public:

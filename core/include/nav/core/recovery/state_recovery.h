@@ -64,8 +64,8 @@ const char* to_string(RecoveryKernel kernel);
 /// Preconditioner of the PCG modes on the filter's block matrix (CSR snapshots: block Jacobi).
 enum class RecoveryPreconditioner {
   kBlockJacobi,  ///< blkdiag(Λ_ii) (with `kernel`)
-  kFactor,       ///< Cholesky of Λ at a refresh + block Jacobi on newer states
-                 ///< (factor_preconditioner.h); generic kernel; refresh policy below
+  kFactor,       ///< Cholesky of Λ at a refresh + a dense block over the robot and newer
+                 ///< states (factor_preconditioner.h); Λ products by `kernel`; refresh below
 };
 
 const char* to_string(RecoveryPreconditioner preconditioner);
