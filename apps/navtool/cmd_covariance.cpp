@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -156,6 +157,10 @@ double percentile(std::vector<double> v, double p) {
   return v[lo] + (pos - static_cast<double>(lo)) * (v[hi] - v[lo]);
 }
 
+double mean(const std::vector<double>& v) {
+  return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+}
+
 double peak_rss_mb() {
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
@@ -231,6 +236,7 @@ void run_covariance(const CovarianceArgs& args) {
     throw CommandError("covariance: " + args.file + ": " + s.to_string());
   }
   std::vector<double> recovery_ms, recovery_cpu_ms, bounds_us_per_link;
+  std::vector<double> refresh_cpu_ms, between_refreshes_cpu_ms;
   double max_relative_residual = 0.0;
   std::vector<double> relative_residuals;
   int steps = 0, capped_steps = 0, refreshes = 0;
@@ -255,6 +261,7 @@ void run_covariance(const CovarianceArgs& args) {
     relative_residuals.push_back(r.max_relative_residual);
     if (r.hit_iteration_cap) ++capped_steps;
     refreshes += r.refreshed ? 1 : 0;
+    (r.refreshed ? refresh_cpu_ms : between_refreshes_cpu_ms).push_back(recovery_cpu_ms.back());
     iterations.push_back(r.iterations);
     if (args.checks > 0 && vertex % check_every == 0) {
       try {
@@ -340,6 +347,9 @@ void run_covariance(const CovarianceArgs& args) {
   out["recovery_ms_max"] = percentile(recovery_ms, 1.0);
   out["recovery_cpu_ms_median"] = percentile(recovery_cpu_ms, 0.5);
   out["recovery_cpu_ms_p99"] = percentile(recovery_cpu_ms, 0.99);
+  out["recovery_cpu_ms_mean"] = mean(recovery_cpu_ms);
+  out["recovery_cpu_ms_refresh_median"] = percentile(refresh_cpu_ms, 0.5);
+  out["recovery_cpu_ms_between_refreshes_median"] = percentile(between_refreshes_cpu_ms, 0.5);
   out["bounds_update_us_median"] = percentile(bounds_us_per_link, 0.5);
   out["exact_marginals_ms"] = exact_ms;
   out["exact_marginals_cpu_ms"] = exact_cpu_ms;
