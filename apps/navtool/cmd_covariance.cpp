@@ -56,6 +56,8 @@ struct CovarianceArgs {
   int refresh_interval = 10;  ///< amortised refactorisation (the library default 1 refactors
                               ///< every step, for bit-identical checkpoints)
   double refresh_residual = core::StateRecoveryOptions{}.refresh_residual;
+  int iterations_after_refresh = core::StateRecoveryOptions{}.iterations_after_refresh;
+  double exact_refresh_margin = core::BoundsOptions{}.exact_refresh_margin;
   int checks = 100;  ///< time-of-use check times spread over the run
 };
 
@@ -217,7 +219,9 @@ core::ReplayOptions replay_options(const CovarianceArgs& a) {
                                   : core::RecoveryPreconditioner::kBlockJacobi;
   o.recovery.refresh_interval = a.refresh_interval;
   o.recovery.refresh_residual = a.refresh_residual;
+  o.recovery.iterations_after_refresh = a.iterations_after_refresh;
   o.bounds.certify_truncation = !a.no_certify;
+  o.bounds.exact_refresh_margin = a.exact_refresh_margin;
   o.recovery_operator =
       a.csr ? core::RecoveryOperator::kCsrSnapshot : core::RecoveryOperator::kInformationMatrix;
   return o;
@@ -315,6 +319,7 @@ void run_covariance(const CovarianceArgs& args) {
   out["capped_steps"] = capped_steps;
   out["preconditioner"] = core::to_string(options.recovery.preconditioner);
   out["refreshes"] = refreshes;
+  out["iterations_after_refresh"] = options.recovery.iterations_after_refresh;
   out["iterations_median"] = percentile(iterations, 0.5);
   out["time_of_use_checks"] = time_of_use.checks;
   out["time_of_use_check_every_steps"] = check_every;
@@ -338,6 +343,7 @@ void run_covariance(const CovarianceArgs& args) {
           : json(static_cast<double>(time_of_use.markov_blanket_overconfident) /
                  static_cast<double>(time_of_use.markov_blanket.size()));
   out["certified_bounds"] = options.bounds.certify_truncation;
+  out["exact_refresh_margin"] = options.bounds.exact_refresh_margin;
   out["operator"] = args.csr ? "csr-snapshot" : "information-matrix";
   out["kernel"] = core::to_string(options.recovery.kernel);
   out["broken_chain_vertices"] = replay.broken_chain_vertices();
@@ -442,6 +448,14 @@ void add_covariance(CLI::App& app) {
   cmd->add_option("--refresh-residual", args->refresh_residual,
                   "factor: refactor when the previous step's relative residual exceeded this")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--iterations-after-refresh", args->iterations_after_refresh,
+                  "factor: at most this many PCG iterations in a step that refactored (default 1: "
+                  "M = Λ then, one iteration is the direct solve)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--exact-refresh-margin", args->exact_refresh_margin,
+                  "factor: relative margin τ over the exact marginals of a refresh (default "
+                  "1e-8; bounds.h)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--checks", args->checks,
                   "time-of-use checks (relative-pose Fig. 3, bounds vs exact) spread evenly "
                   "over the run (default 100; 0: none)")

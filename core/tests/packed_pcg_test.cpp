@@ -271,7 +271,9 @@ TEST(StateRecoveryKernels, FactorPreconditionedPackedAndGenericAgree) {
     ASSERT_TRUE(a.status.ok() && b.status.ok());
     EXPECT_EQ(a.refreshed, b.refreshed);
     EXPECT_LT((packed.solution() - generic.solution()).norm(), 1e-9 * generic.solution().norm());
-    if (step == 0) {  // Λ was factored: M = Λ, so the column is exact to rounding
+    // A refreshed step runs iterations_after_refresh (1) iterations, the others the budget.
+    EXPECT_EQ(a.iterations, a.refreshed ? 1 : packed_options.iterations_per_step);
+    if (step == 0) {  // Λ was factored: M = Λ, one iteration is the direct solve
       EXPECT_LT((packed.robot_column() - exact_column).norm(), 1e-9 * exact_column.norm());
     }
     lambda.add_to_block(3, 3, 0.5 * Eigen::MatrixXd::Identity(d, d));  // a later link's term

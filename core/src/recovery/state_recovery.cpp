@@ -60,6 +60,11 @@ Status StateRecoveryOptions::validate() const {
                          "refresh_residual > 0, got " + std::to_string(refresh_interval) +
                              " and " + std::to_string(refresh_residual));
   }
+  if (iterations_after_refresh < 1) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "StateRecoveryOptions.iterations_after_refresh must be >= 1, got " +
+                             std::to_string(iterations_after_refresh));
+  }
   if (max_iterations < 1) {
     return Status::Error(StatusCode::kInvalidArgument,
                          "StateRecoveryOptions.max_iterations must be >= 1, got " +
@@ -229,12 +234,16 @@ void StateRecovery::note_convergence(RecoveryResult& result, const PcgSummary& s
 }
 
 RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Preconditioner& M,
-                                         const Eigen::VectorXd& eta) {
+                                         const Eigen::VectorXd& eta, int iteration_cap) {
   RecoveryResult result;
   result.mode = options_.mode;
   result.refactored_blocks = preconditioner_.num_blocks();
   fill_rhs(eta);
-  const PcgSummary summary = solve_pcg(A, M, rhs_, solution_, pcg_options(), workspace_);
+  PcgOptions pcg = pcg_options();
+  if (iteration_cap >= 0 && options_.mode == RecoveryMode::kFixedIterations) {
+    pcg.max_iterations = std::min(pcg.max_iterations, iteration_cap);
+  }
+  const PcgSummary summary = solve_pcg(A, M, rhs_, solution_, pcg, workspace_);
   result.status = summary.status;
   result.iterations = summary.iterations;
   if (summary.residual_norm.size() == rhs_.cols()) {
@@ -262,12 +271,13 @@ RecoveryResult StateRecovery::solve_factor(const InformationMatrix& lambda,
   }
   result.status = factor_.update_trailing(lambda);
   if (!result.status.ok()) return result;
+  const int cap = refresh ? options_.iterations_after_refresh : -1;
   if (options_.kernel == RecoveryKernel::kPacked) {
     packed_operator_.refresh(lambda);
     result = solve_with(PackedSpdOperator(packed_operator_, packed_rhs_, packed_solution_),
-                        factor_, eta);
+                        factor_, eta, cap);
   } else {
-    result = solve_with(InformationOperator(lambda), factor_, eta);
+    result = solve_with(InformationOperator(lambda), factor_, eta, cap);
   }
   result.refactored_blocks = static_cast<int>((lambda.dim() - factor_.factored_dim()) / block_dim_);
   result.refreshed = refresh;

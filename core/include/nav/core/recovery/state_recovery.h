@@ -94,6 +94,11 @@ struct StateRecoveryOptions {
   /// carries no factor and refactors at its first solve).
   int refresh_interval = 1;
   double refresh_residual = 1e-6;
+  /// kFactor, kFixedIterations: at most this many PCG iterations (>= 1) in a step that
+  /// refactored. M = Λ then, so the first iteration is the direct solve (α = 1); later ones
+  /// iterate on rounding noise, which drifts X along Λ's weakest directions, where the computed
+  /// residual cannot see it (docs/consistency.md "Iterations after a refresh").
+  int iterations_after_refresh = 1;
   Status validate() const;
 };
 
@@ -166,8 +171,9 @@ class StateRecovery {
   const ExactMarginals* refreshed_marginals() const { return factor_.marginals(); }
 
  private:
+  /// `iteration_cap` >= 0 lowers the fixed-iteration budget of this solve (-1: none).
   RecoveryResult solve_with(const SpdOperator& A, const Preconditioner& M,
-                            const Eigen::VectorXd& eta);
+                            const Eigen::VectorXd& eta, int iteration_cap = -1);
   RecoveryResult solve_factor(const InformationMatrix& lambda, const Eigen::VectorXd& eta);
   RecoveryResult solve_packed(const InformationMatrix& lambda, const Eigen::VectorXd& eta);
   PcgOptions pcg_options() const;
