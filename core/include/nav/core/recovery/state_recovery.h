@@ -76,15 +76,14 @@ struct StateRecoveryOptions {
   int iterations_per_step = 5;
   /// kTolerance: stop when ‖b_c - Λ x_c‖ <= relative_tolerance ‖b_c‖ for every column, > 0.
   double relative_tolerance = 1e-10;
-  /// kTolerance: iteration cap per solve, >= 1. Hitting it is not an error: the result holds
-  /// the iterate reached, hit_iteration_cap and the residual (the bounds certify from it).
+  /// kTolerance: iteration cap per solve, >= 1; hitting it is not an error (hit_iteration_cap,
+  /// the residual reached: the bounds certify from it).
   int max_iterations = 5000;
   /// Solver of the PCG modes on an InformationMatrix (CSR snapshots always use pcg.h).
   RecoveryKernel kernel = RecoveryKernel::kPacked;
-  /// PCG modes: recompute the true residual B - Λ X after the iterations (one more Λ product).
-  /// false reports the recurrence residual instead: only for a caller that certifies the
-  /// result elsewhere (NavFilter's recovery thread: the filter evaluates the true residual of
-  /// the extended result on its current Λ before the bounds use it).
+  /// PCG modes: recompute the true residual B - Λ X at the end (one more Λ product). false
+  /// reports the recurrence residual: only for a caller that certifies elsewhere (NavFilter's
+  /// recovery thread: the filter takes the true residual on its current Λ).
   bool recompute_true_residual = true;
   RecoveryPreconditioner preconditioner = RecoveryPreconditioner::kFactor;
   /// kFactor: refactor before a solve when `refresh_interval` solves (>= 1) used the factor, or
@@ -94,10 +93,9 @@ struct StateRecoveryOptions {
   /// carries no factor and refactors at its first solve).
   int refresh_interval = 1;
   double refresh_residual = 1e-6;
-  /// kFactor, kFixedIterations: at most this many PCG iterations (>= 1) in a step that
-  /// refactored. M = Λ then, so the first iteration is the direct solve (α = 1); later ones
-  /// iterate on rounding noise, which drifts X along Λ's weakest directions, where the computed
-  /// residual cannot see it (docs/consistency.md "Iterations after a refresh").
+  /// kFactor, kFixedIterations: at most this many iterations (>= 1) in a step that refactored:
+  /// M = Λ, the first is the direct solve; later ones drift on rounding noise where the
+  /// computed residual cannot see it (docs/consistency.md "Iterations after a refresh").
   int iterations_after_refresh = 1;
   Status validate() const;
 };
@@ -113,8 +111,7 @@ struct RecoveryResult {
   double column_relative_residual = 0.0; ///< max_c ‖e_c - Λσ_c‖ / ‖e_c‖ over the Σ_{*r} columns
   double max_relative_residual = 0.0;    ///< max of the two above
   double column_residual_frobenius = 0.0;  ///< ‖E_r - Λ Σ̂_{*r}‖_F (certificate, bounds.h)
-  /// ‖E_r - Λ Σ̂_{*r}‖₂ (largest singular value; <= the Frobenius norm, up to sqrt(block_dim)
-  /// times smaller), every mode: the tighter input of the same certificate (bounds.h).
+  /// ‖E_r - Λ Σ̂_{*r}‖₂ (<= the Frobenius norm), every mode: the certificate's tighter input.
   double column_residual_spectral = 0.0;
   int refactored_blocks = 0;  ///< preconditioner blocks re-inverted (packed: changed only)
   /// kFactor: this solve refactored Λ (StateRecovery::refreshed_marginals() are of this Λ).
@@ -132,8 +129,7 @@ class StateRecovery {
   const StateRecoveryOptions& options() const { return options_; }
   Status set_options(const StateRecoveryOptions& options);
 
-  /// Starts with one state (the robot): μ = x0, Σ_{*r} = P0 (exact for a filter initialised
-  /// with the prior (x0, P0)).
+  /// Starts with one state (the robot): μ = x0, Σ_{*r} = P0 (exact for the prior (x0, P0)).
   Status initialize(const Eigen::VectorXd& x0, const Eigen::MatrixXd& P0);
   /// Replaces the warm start, n x (1 + block_dim) with n a multiple of block_dim.
   Status set_solution(const Eigen::MatrixXd& X);
@@ -151,8 +147,7 @@ class StateRecovery {
   /// size or preconditioner error the warm start is left as it was; after a CG breakdown
   /// (operator not SPD) it holds the iterate reached. status says why.
   RecoveryResult solve(const CsrMatrix& lambda, const Eigen::VectorXd& eta);
-  /// Same on the filter's block matrix directly (InformationMatrix::multiply). kDirect
-  /// converts to a sparse matrix first.
+  /// Same on the filter's block matrix (kDirect converts to a sparse matrix first).
   RecoveryResult solve(const InformationMatrix& lambda, const Eigen::VectorXd& eta);
 
   /// [μ | Σ_{*r}], n x (1 + block_dim).
@@ -164,8 +159,7 @@ class StateRecovery {
   Eigen::MatrixXd robot_covariance() const;
   /// Σ_{i r} (rows of block i of the robot column), block_dim x block_dim.
   Eigen::MatrixXd cross_covariance(int block) const;
-  /// E_r − Λ Σ^_{*r} of the last solve (n x block_dim; recurrence residual when
-  /// recompute_true_residual is off): the scaled certificate's input (bounds.h).
+  /// E_r − Λ Σ^_{*r} of the last solve (n x d; recurrence residual without recompute): bounds.h.
   const Eigen::MatrixXd& column_residual() const { return column_residual_; }
   /// kFactor: exact marginals of the last refresh's Λ (null before the first).
   const ExactMarginals* refreshed_marginals() const { return factor_.marginals(); }
