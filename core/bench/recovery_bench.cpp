@@ -81,6 +81,7 @@ void BM_RecoveryStep(benchmark::State& state, const std::string& name, StepKerne
   options.iterations_per_step = static_cast<int>(state.range(0));
   options.kernel =
       kernel == StepKernel::kPacked ? RecoveryKernel::kPacked : RecoveryKernel::kGeneric;
+  options.preconditioner = RecoveryPreconditioner::kBlockJacobi;  // the real-time default
   StateRecovery recovery(6, options);
   (void)recovery.set_solution(Eigen::MatrixXd::Zero(lambda.dim(), 7));
   const Mat6 link = Mat6::Identity() * 1e-3;
