@@ -5,7 +5,8 @@
 # The camera dive plays with its camera (the player's fake GigE camera on lo, 160 x 128 px
 # frames: install-navd.sh), so navd keeps delayed states. Counts (navd_vm_tool): N_stop = the
 # stopped navd's last NAVD_SOLUTION, N_ckpt = the newest checkpoint, N_resume = the new navd's
-# first NAVD_SOLUTION; passes when N_stop = N_ckpt = N_resume > 0. SIGSTOP comes right after a
+# first NAVD_SOLUTION; passes when N_stop = N_ckpt > 0 and N_ckpt <= N_resume <= N_ckpt + the
+# frames the camera can have served between the SIGSTOP and that first NAVD_SOLUTION. SIGSTOP comes right after a
 # fresh checkpoint; when an image was fused between that checkpoint and the SIGSTOP
 # (N_stop != N_ckpt: the periodic checkpoint's loss window, not the restart's), navd is
 # continued and stopped again after the next checkpoint (3 tries).
@@ -83,11 +84,22 @@ applied=$(echo "$resumed" | sed -n 's/.*(\([0-9]*\) measurements applied).*/\1/p
 [ "${applied:-0}" = "$(field applied "$ckpt")" ] ||
   fail "the resumed navd applied ${applied:-?} measurements, the checkpoint holds $(field applied "$ckpt")"
 # The stopped navd publishes nothing: every NAVD_SOLUTION after the SIGSTOP is the new navd's.
-first_new() { navd_vm_tool solutions "$log" 2> /dev/null | awk -v t="$t_stop_us" '$1 > t {print $3; exit}'; }
+first_new() { navd_vm_tool solutions "$log" 2> /dev/null | awk -v t="$t_stop_us" '$1 > t {print $1, $3; exit}'; }
 has_new() { [ -n "$(first_new)" ]; }
 wait_for 30 has_new ||
   fail "the restarted navd published no NAVD_SOLUTION in 30 s"
-n_resume=$(first_new)
-note "delayed states: stopped navd $n_stop, checkpoint $n_ckpt, restarted navd's first NAVD_SOLUTION $n_resume"
-[ "$n_resume" = "$n_ckpt" ] ||
-  fail "the restarted navd has $n_resume delayed states, its checkpoint $n_ckpt"
+read -r t_resume_us n_resume <<< "$(first_new)"
+# The restarted navd may fuse frames that arrive before its first NAVD_SOLUTION: at most one per
+# image interval of the dive (images.csv) since the SIGSTOP, plus one. Fewer states than the
+# checkpoint's is a lost map.
+interval_us=$(awk -F, 'NR > 2 && (m == "" || $2 - p < m) {m = $2 - p} NR > 1 {p = $2} END {print m}' \
+  "$NAVD_VM_DIR/camera-dive/images.csv")
+[ "${interval_us:-0}" -gt 0 ] || fail "no image interval in $NAVD_VM_DIR/camera-dive/images.csv"
+new_max=$(( (t_resume_us - t_stop_us) / interval_us + 1 ))
+note "delayed states: stopped navd $n_stop, checkpoint $n_ckpt, restarted navd's first NAVD_SOLUTION $n_resume" \
+  "($(( (t_resume_us - t_stop_us) / 1000 )) ms after the SIGSTOP: at most $new_max new frames)"
+[ "$n_resume" -ge "$n_ckpt" ] ||
+  fail "the restarted navd has $n_resume delayed states, fewer than its checkpoint's $n_ckpt"
+[ "$n_resume" -le $((n_ckpt + new_max)) ] ||
+  fail "the restarted navd has $n_resume delayed states: more than its checkpoint's $n_ckpt plus" \
+    "the $new_max frames the camera can have served since the SIGSTOP"
