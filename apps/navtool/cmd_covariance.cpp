@@ -454,7 +454,7 @@ void add_covariance(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--exact-refresh-margin", args->exact_refresh_margin,
                   "factor: relative margin τ over the exact marginals of a refresh (default "
-                  "1e-8; bounds.h)")
+                  "1e-6; bounds.h)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--checks", args->checks,
                   "time-of-use checks (relative-pose Fig. 3, bounds vs exact) spread evenly "

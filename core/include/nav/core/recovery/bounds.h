@@ -57,8 +57,9 @@ struct BoundsOptions {
   /// the paper's uninflated Algorithm 1 (for measuring what truncation does to it).
   bool certify_truncation = true;
   /// refresh_exact: Σ~ = (1 + τ) Σ + τ diag(Σ) over the exact marginal Σ (rounding of the
-  /// selected inversion, relative to each variance's own scale).
-  double exact_refresh_margin = 1e-8;
+  /// selected inversion, relative to each variance's own scale; 1e-8 was measured too small at
+  /// κ(Λ) ≈ 1e14: docs/consistency.md "Exact refresh").
+  double exact_refresh_margin = 1e-6;
 };
 
 /// The joint used for a link proposal between the robot r and state i (paper eq. 6).
