@@ -6,8 +6,9 @@
 # frames: install-navd.sh), so navd keeps delayed states. Counts (navd_vm_tool): N_stop = the
 # stopped navd's last NAVD_SOLUTION, N_ckpt = the newest checkpoint, N_resume = the new navd's
 # first NAVD_SOLUTION; passes when N_stop = N_ckpt > 0 and N_ckpt <= N_resume <= N_ckpt + the
-# frames the camera can have served between the SIGSTOP and that first NAVD_SOLUTION. SIGSTOP comes right after a
-# fresh checkpoint; when an image was fused between that checkpoint and the SIGSTOP
+# frames the camera can have served between the SIGSTOP and that first NAVD_SOLUTION. SIGSTOP
+# comes right after a fresh checkpoint; when an image was fused between that checkpoint and the
+# SIGSTOP
 # (N_stop != N_ckpt: the periodic checkpoint's loss window, not the restart's), navd is
 # continued and stopped again after the next checkpoint (3 tries).
 . /usr/lib/navd-vm/lib.sh
