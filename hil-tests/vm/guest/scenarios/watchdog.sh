@@ -8,8 +8,7 @@
 # first NAVD_SOLUTION; passes when N_stop = N_ckpt > 0 and N_ckpt <= N_resume <= N_ckpt + the
 # frames the camera can have served between the SIGSTOP and that first NAVD_SOLUTION. SIGSTOP
 # comes right after a fresh checkpoint; when an image was fused between that checkpoint and the
-# SIGSTOP
-# (N_stop != N_ckpt: the periodic checkpoint's loss window, not the restart's), navd is
+# SIGSTOP (N_stop != N_ckpt: the periodic checkpoint's loss window, not the restart's), navd is
 # continued and stopped again after the next checkpoint (3 tries).
 . /usr/lib/navd-vm/lib.sh
 DIVE=$NAVD_VM_DIR/camera-dive WITH_CAMERA=1 start_player --hold
