@@ -17,6 +17,7 @@
 
 #include "nav/core/recovery/exact_marginals.h"
 
+#include "exact_marginals_impl.h"
 #include "selinv_kernel.h"
 
 #include <cholmod.h>
@@ -40,53 +41,6 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 }
 
 }  // namespace
-
-struct ExactMarginals::Impl {
-  int block_dim = 0;
-  int n = 0;
-  mutable cholmod_common common{};
-  cholmod_factor* L = nullptr;
-  std::unique_ptr<double[]> sigma;  // same layout as L->x; every entry written by invert()
-  std::vector<int> col_super;       // supernode of each (permuted) column
-  std::vector<int> inv_perm;        // inv_perm[original] = permuted
-  double factor_ms = 0.0;
-  double inversion_ms = 0.0;
-  // Reused buffers of solve() (cholmod_solve2).
-  mutable cholmod_dense* solve_x = nullptr;
-  mutable cholmod_dense* solve_y = nullptr;
-  mutable cholmod_dense* solve_e = nullptr;
-
-  Impl() { cholmod_start(&common); }
-  ~Impl() {
-    cholmod_free_dense(&solve_x, &common);
-    cholmod_free_dense(&solve_y, &common);
-    cholmod_free_dense(&solve_e, &common);
-    if (L != nullptr) cholmod_free_factor(&L, &common);
-    cholmod_finish(&common);
-  }
-  Impl(const Impl&) = delete;
-  Impl& operator=(const Impl&) = delete;
-
-  const int* super() const { return static_cast<const int*>(L->super); }
-  const int* pi() const { return static_cast<const int*>(L->pi); }
-  const int* px() const { return static_cast<const int*>(L->px); }
-  const int* rows() const { return static_cast<const int*>(L->s); }
-
-  /// Offset into sigma of permuted entry (i, j), or -1 if not in the pattern.
-  std::ptrdiff_t offset(int i, int j) const {
-    if (i < j) std::swap(i, j);
-    const int s = col_super[static_cast<size_t>(j)];
-    const int* first = rows() + pi()[s];
-    const int* last = rows() + pi()[s + 1];
-    const int* it = std::lower_bound(first, last, i);
-    if (it == last || *it != i) return -1;
-    const std::ptrdiff_t nrows = last - first;
-    return px()[s] + static_cast<std::ptrdiff_t>(j - super()[s]) * nrows + (it - first);
-  }
-
-  void factor(const Eigen::SparseMatrix<double>& Lambda, MarginalsOrdering ordering);
-  void invert(MarginalsKernel kernel_choice);
-};
 
 namespace {
 
@@ -204,7 +158,7 @@ void ExactMarginals::Impl::factor(const Eigen::SparseMatrix<double>& Lambda,
   factor_ms = ms_since(t0);
 }
 
-void ExactMarginals::Impl::invert(MarginalsKernel kernel_choice) {
+void ExactMarginals::Impl::invert() {
   const auto t0 = std::chrono::steady_clock::now();
   const int nsuper = static_cast<int>(L->nsuper);
   const int* Ls = rows();
@@ -226,7 +180,7 @@ void ExactMarginals::Impl::invert(MarginalsKernel kernel_choice) {
   const int max_below = static_cast<int>(L->maxesize);
   Eigen::MatrixXd srr_buffer(std::max(max_below, 1), std::max(max_below, 1));
   std::vector<int> map(static_cast<size_t>(std::max(max_below, 1)));
-  const SelinvSupernodeKernel kernel = kernel_choice == MarginalsKernel::kBaseline
+  const SelinvSupernodeKernel dense_kernel = kernel == MarginalsKernel::kBaseline
                                            ? &baseline::selinv_supernode
                                            : selinv_supernode_kernel();
 
@@ -266,7 +220,7 @@ void ExactMarginals::Impl::invert(MarginalsKernel kernel_choice) {
       q0 = q1;
     }
     // Dense part (selinv_kernel.inc), in the instruction set chosen at load time.
-    kernel(Lx + px()[s], nrows, nc, sigma.get() + px()[s], srr_buffer.data(),
+    dense_kernel(Lx + px()[s], nrows, nc, sigma.get() + px()[s], srr_buffer.data(),
            static_cast<int>(srr_buffer.rows()));
   }
   inversion_ms = ms_since(t0);
@@ -294,6 +248,7 @@ ExactMarginals ExactMarginals::compute(const Eigen::SparseMatrix<double>& Lambda
   auto impl = std::make_unique<Impl>();
   impl->block_dim = block_dim;
   impl->n = static_cast<int>(Lambda.rows());
+  impl->kernel = kernel;
   if (Lambda.isCompressed()) {
     impl->factor(Lambda, ordering);
   } else {
@@ -301,7 +256,7 @@ ExactMarginals ExactMarginals::compute(const Eigen::SparseMatrix<double>& Lambda
     compressed.makeCompressed();
     impl->factor(compressed, ordering);
   }
-  impl->invert(kernel);
+  impl->invert();
   return ExactMarginals(std::move(impl));
 }
 
@@ -386,56 +341,16 @@ Eigen::MatrixXd ExactMarginals::joint(int a, int b) const {
     return J;
   }
   // Outside the pattern: solve the columns of blocks a and b exactly with the factor.
-  cholmod_common* c = &impl_->common;
-  cholmod_dense* E = cholmod_zeros(impl_->n, 2 * d, CHOLMOD_REAL, c);
-  if (E == nullptr) throw ExactMarginalsError("ExactMarginals::joint: CHOLMOD allocation failed");
-  auto* Ex = static_cast<double*>(E->x);
+  const int n = impl_->n;
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(n, 2 * d);
+  for (int k = 0; k < 2 * d; ++k) E(k < d ? a * d + k : b * d + k - d, k) += 1.0;
+  Eigen::MatrixXd X(n, 2 * d);
+  impl_->solve(E, X);
   for (int k = 0; k < 2 * d; ++k) {
-    const int g = (k < d ? a * d + k : b * d + k - d);
-    Ex[static_cast<size_t>(k) * static_cast<size_t>(impl_->n) + static_cast<size_t>(g)] += 1.0;
+    for (int r = 0; r < 2 * d; ++r) J(r, k) = X(r < d ? a * d + r : b * d + r - d, k);
   }
-  cholmod_dense* X = cholmod_solve(CHOLMOD_A, impl_->L, E, c);
-  cholmod_free_dense(&E, c);
-  if (X == nullptr) throw ExactMarginalsError("ExactMarginals::joint: CHOLMOD solve failed");
-  const auto* Xx = static_cast<const double*>(X->x);
-  for (int k = 0; k < 2 * d; ++k) {
-    for (int r = 0; r < 2 * d; ++r) {
-      const int g = (r < d ? a * d + r : b * d + r - d);
-      J(r, k) = Xx[static_cast<size_t>(k) * static_cast<size_t>(impl_->n) + static_cast<size_t>(g)];
-    }
-  }
-  cholmod_free_dense(&X, c);
   J = 0.5 * (J + J.transpose()).eval();
   return J;
-}
-
-void ExactMarginals::solve(const Eigen::Ref<const Eigen::MatrixXd>& B,
-                           Eigen::Ref<Eigen::MatrixXd> X) const {
-  if (B.rows() != impl_->n || X.rows() != impl_->n || X.cols() != B.cols()) {
-    throw ExactMarginalsError("ExactMarginals::solve: factor of dimension " +
-                              std::to_string(impl_->n) + ", B " + std::to_string(B.rows()) + "x" +
-                              std::to_string(B.cols()) + ", X " + std::to_string(X.rows()) + "x" +
-                              std::to_string(X.cols()));
-  }
-  if (B.cols() == 0) return;
-  cholmod_dense b{};
-  b.nrow = static_cast<size_t>(B.rows());
-  b.ncol = static_cast<size_t>(B.cols());
-  b.nzmax = b.nrow * b.ncol;
-  b.d = static_cast<size_t>(B.outerStride());
-  b.x = const_cast<double*>(B.data());  // read only (cholmod_solve2 does not write B)
-  b.xtype = CHOLMOD_REAL;
-  b.dtype = CHOLMOD_DOUBLE;
-  cholmod_common* c = &impl_->common;
-  if (!cholmod_solve2(CHOLMOD_A, impl_->L, &b, nullptr, &impl_->solve_x, nullptr,
-                      &impl_->solve_y, &impl_->solve_e, c) ||
-      impl_->solve_x == nullptr) {
-    throw ExactMarginalsError("ExactMarginals::solve: CHOLMOD solve failed (status " +
-                              std::to_string(c->status) + ")");
-  }
-  const auto* x = static_cast<const double*>(impl_->solve_x->x);
-  const auto ld = static_cast<Eigen::Index>(impl_->solve_x->d);
-  X = ConstMatMap(x, B.rows(), B.cols(), Eigen::OuterStride<>(ld));
 }
 
 }  // namespace nav::core

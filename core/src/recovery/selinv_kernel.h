@@ -1,7 +1,8 @@
 #pragma once
-// Runtime-dispatched dense kernel of the supernodal selected inversion (exact_marginals.cpp,
-// selinv_kernel.inc). Private to core/src/recovery; plain pointers only, so the AVX2 copy's
-// renamed Eigen never crosses the interface.
+// Runtime-dispatched dense kernels of the supernodal factor (selinv_kernel.inc): the selected
+// inversion (exact_marginals.cpp) and the two triangular solves (exact_marginals_solve.cpp).
+// Private to core/src/recovery; plain pointers only, so the AVX2 copy's renamed Eigen never
+// crosses the interface.
 
 namespace nav::core {
 
@@ -13,19 +14,41 @@ namespace nav::core {
 using SelinvSupernodeKernel = void (*)(const double* L_block, int nrows, int nc,
                                        double* S_block, double* S_RR, int ld_srr);
 
+/// One supernode of the forward solve L Y = B, m right-hand sides: solves L_JJ X_J = X_J in
+/// place (X_J: the supernode's nc rows, nc x m, row-major) and writes T = L_RJ X_J (nr x m,
+/// row-major), which the caller subtracts from the rows R.
+using LsolveSupernodeKernel = void (*)(const double* L_block, int nrows, int nc, double* X_J,
+                                       int m, double* T);
+/// One supernode of the backward solve Lᵀ Z = Y: X_J -= L_RJᵀ X_R (X_R: the rows R gathered,
+/// nr x m, row-major), then solves L_JJᵀ X_J = X_J in place.
+using LtsolveSupernodeKernel = void (*)(const double* L_block, int nrows, int nc, double* X_J,
+                                        int m, const double* X_R);
+
 namespace baseline {
 void selinv_supernode(const double* L_block, int nrows, int nc, double* S_block, double* S_RR,
                       int ld_srr);
-}
-namespace avx2 {
+void lsolve_supernode(const double* L_block, int nrows, int nc, double* X_J, int m, double* T);
+void ltsolve_supernode(const double* L_block, int nrows, int nc, double* X_J, int m,
+                       const double* X_R);
+}  // namespace baseline
 /// Compiled with -mavx2 -mfma (x86-64 only; call only when the CPU has both).
+namespace avx2 {
 void selinv_supernode(const double* L_block, int nrows, int nc, double* S_block, double* S_RR,
                       int ld_srr);
-}
+void lsolve_supernode(const double* L_block, int nrows, int nc, double* X_J, int m, double* T);
+void ltsolve_supernode(const double* L_block, int nrows, int nc, double* X_J, int m,
+                       const double* X_R);
+}  // namespace avx2
+
+struct SupernodeSolveKernels {
+  LsolveSupernodeKernel lsolve;
+  LtsolveSupernodeKernel ltsolve;
+};
 
 /// The AVX2+FMA kernel when this CPU has both (and it was compiled), else the baseline one.
 /// Chosen once per process.
 SelinvSupernodeKernel selinv_supernode_kernel();
+SupernodeSolveKernels supernode_solve_kernels();
 /// "avx2-fma" or "baseline": what selinv_supernode_kernel() returns here.
 const char* selinv_kernel_name();
 

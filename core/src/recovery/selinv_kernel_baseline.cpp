@@ -1,5 +1,5 @@
-// The selected-inversion supernode kernel (selinv_kernel.inc) with the project's default
-// instruction set, and the load-time choice between it and the AVX2+FMA copy.
+// The supernode kernels (selinv_kernel.inc) with the project's default instruction set, and the
+// load-time choice between them and the AVX2+FMA copy.
 #define NAV_SELINV_NAMESPACE baseline
 #include "selinv_kernel.inc"
 
@@ -24,6 +24,13 @@ SelinvSupernodeKernel selinv_supernode_kernel() {
   if (kUseAvx2) return &avx2::selinv_supernode;
 #endif
   return &baseline::selinv_supernode;
+}
+
+SupernodeSolveKernels supernode_solve_kernels() {
+#if defined(NAV_SELINV_HAVE_AVX2)
+  if (kUseAvx2) return {&avx2::lsolve_supernode, &avx2::ltsolve_supernode};
+#endif
+  return {&baseline::lsolve_supernode, &baseline::ltsolve_supernode};
 }
 
 const char* selinv_kernel_name() { return kUseAvx2 ? "avx2-fma" : "baseline"; }

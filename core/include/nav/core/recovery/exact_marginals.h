@@ -26,8 +26,8 @@
 // opens 4-thread OpenMP regions on large supernodes whatever OMP_NUM_THREADS says; run with
 // OMP_THREAD_LIMIT=1 to keep it on one core (it is faster on a loaded 2-core machine).
 //
-// Not thread-safe for concurrent joint() calls that fall outside the pattern (they use the
-// CHOLMOD workspace); marginal() and in-pattern joint() are const and read-only.
+// Not thread-safe for concurrent solve() or joint() calls that fall outside the pattern (they
+// share one solve workspace); marginal() and in-pattern joint() are const and read-only.
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
@@ -50,8 +50,8 @@ enum class MarginalsOrdering {
   kCholmodAuto,  ///< CHOLMOD's default choice (scalar AMD, METIS if AMD fills badly)
 };
 
-/// Instruction set of the selected inversion's dense kernels (Eigen GEMM/triangular products
-/// per supernode). Both give the same marginals up to rounding.
+/// Instruction set of the dense kernels per supernode (Eigen GEMM/triangular products) of the
+/// selected inversion and of solve(). Both give the same results up to rounding.
 enum class MarginalsKernel {
   kAuto,      ///< AVX2+FMA copy when the CPU has both (checked once at load time), else baseline
   kBaseline,  ///< the project's default instruction set (SSE2 on x86-64); benchmark baseline
@@ -89,7 +89,7 @@ class ExactMarginals {
   /// X = Lambda⁻¹ B with the factor (two supernodal triangular solves, O(nnz(L) m) for an
   /// n x m B; no allocation after the first call with a given m): the preconditioner of
   /// recovery/factor_preconditioner.h. Throws ExactMarginalsError on a size mismatch (naming
-  /// both sizes) or a CHOLMOD failure. Uses the CHOLMOD workspace (not thread-safe).
+  /// both sizes). Uses the object's solve workspace (not thread-safe).
   void solve(const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::Ref<Eigen::MatrixXd> X) const;
 
   /// True when every entry of the off-diagonal block (a, b) lies in the pattern of L, i.e.
