@@ -5,7 +5,7 @@
 // supernode s owns columns super[s]..super[s+1]-1, a sorted row list s_rows (its own columns
 // first) and a column-major nrows x ncols value block at offset px[s]. The diagonal block of
 // each supernode is stored in full (both triangles) so gathers never need to transpose.
-// Indices are in the permuted order of the factor: Sigma_A(Perm[i], Perm[j]) = Sigma_P(i, j).
+// Indices are in the permuted order of the factor: Sigma_A(perm[i], perm[j]) = Sigma_P(i, j).
 //
 // Per supernode, with U = L_JJ^-1 (explicit, recursive triangular inverse: n^3/3 flops):
 //   Y = Sigma_RR L_RJ U,  Sigma_RJ = -Y,  Sigma_JJ = U^T U + Y^T (L_RJ U).
@@ -24,6 +24,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <chrono>
 #include <string>
@@ -74,6 +75,76 @@ cholmod_sparse* lower_to_cholmod(const Eigen::SparseMatrix<double>& Lambda, chol
   return A;
 }
 
+/// A CHOLMOD header over the lower triangle stored in C (no copy; C must outlive it). C's row
+/// indices within a column need not be sorted (Eigen's symmetric permutation leaves them in
+/// scatter order), which CHOLMOD's analysis and supernodal factorisation accept.
+cholmod_sparse lower_view(Eigen::SparseMatrix<double>& C) {
+  cholmod_sparse A{};
+  A.nrow = A.ncol = static_cast<size_t>(C.rows());
+  A.nzmax = static_cast<size_t>(C.nonZeros());
+  A.p = C.outerIndexPtr();
+  A.i = C.innerIndexPtr();
+  A.x = C.valuePtr();
+  A.stype = -1;
+  A.itype = CHOLMOD_INT;
+  A.xtype = CHOLMOD_REAL;
+  A.dtype = CHOLMOD_DOUBLE;
+  A.sorted = 0;
+  A.packed = 1;
+  return A;
+}
+
+/// `order` (order[k] = the block eliminated k-th) followed by a postorder of its elimination
+/// tree (Liu's algorithm with path compression, then a depth-first walk from the roots), so
+/// that every subtree, and hence every supernode, is a contiguous range of columns: the form
+/// CHOLMOD's supernodal analysis needs when it is given the natural ordering. `lower[j]` lists
+/// the blocks i > j with Λ_ij != 0 (original numbering).
+std::vector<int> postordered(const std::vector<int>& order,
+                             const std::vector<std::vector<int>>& lower) {
+  const auto nb = order.size();
+  std::vector<int> position(nb);
+  for (size_t k = 0; k < nb; ++k) position[static_cast<size_t>(order[k])] = static_cast<int>(k);
+  std::vector<std::vector<int>> earlier(nb);  // earlier[k]: neighbours eliminated before k
+  for (size_t j = 0; j < nb; ++j) {
+    for (const int i : lower[j]) {
+      const int a = position[j], b = position[static_cast<size_t>(i)];
+      earlier[static_cast<size_t>(std::max(a, b))].push_back(std::min(a, b));
+    }
+  }
+  std::vector<int> parent(nb, -1), ancestor(nb, -1);
+  for (size_t k = 0; k < nb; ++k) {
+    for (int i : earlier[k]) {
+      while (i != -1 && i < static_cast<int>(k)) {
+        const int next = ancestor[static_cast<size_t>(i)];
+        ancestor[static_cast<size_t>(i)] = static_cast<int>(k);
+        if (next == -1) parent[static_cast<size_t>(i)] = static_cast<int>(k);
+        i = next;
+      }
+    }
+  }
+  std::vector<std::vector<int>> children(nb);
+  std::vector<int> roots;
+  for (size_t k = 0; k < nb; ++k) {
+    (parent[k] < 0 ? roots : children[static_cast<size_t>(parent[k])]).push_back(static_cast<int>(k));
+  }
+  std::vector<int> result, stack;
+  result.reserve(nb);
+  std::vector<size_t> next_child(nb, 0);
+  for (const int root : roots) {
+    stack.push_back(root);
+    while (!stack.empty()) {
+      const auto top = static_cast<size_t>(stack.back());
+      if (next_child[top] < children[top].size()) {
+        stack.push_back(children[top][next_child[top]++]);
+      } else {
+        result.push_back(order[top]);
+        stack.pop_back();
+      }
+    }
+  }
+  return result;
+}
+
 /// Fill-reducing ordering of the block graph (AMD or METIS), expanded to scalars: block order
 /// first, the block_dim scalars of a block kept together and in order.
 std::vector<int> block_ordering(const Eigen::SparseMatrix<double>& Lambda, int block_dim,
@@ -111,6 +182,7 @@ std::vector<int> block_ordering(const Eigen::SparseMatrix<double>& Lambda, int b
                      : cholmod_amd(B, nullptr, 0, block_perm.data(), c);
   cholmod_free_sparse(&B, c);
   if (!ok) throw ExactMarginalsError("ExactMarginals: block ordering failed");
+  block_perm = postordered(block_perm, lower);
   std::vector<int> perm(static_cast<size_t>(n));
   for (int b = 0; b < nb; ++b) {
     for (int k2 = 0; k2 < block_dim; ++k2) {
@@ -129,22 +201,39 @@ void ExactMarginals::Impl::factor(const Eigen::SparseMatrix<double>& Lambda,
   common.print = 0;  // errors are reported by exception, not printed
   common.supernodal = CHOLMOD_SUPERNODAL;
   common.final_asis = 1;
-  std::vector<int> perm;
-  if (ordering != MarginalsOrdering::kCholmodAuto) {
-    perm = block_ordering(Lambda, block_dim, ordering, &common);
-    common.nmethods = 1;
-    common.method[0].ordering = CHOLMOD_GIVEN;
-    common.postorder = 1;
-  }
-  cholmod_sparse* A = lower_to_cholmod(Lambda, &common);
-  L = cholmod_analyze_p(A, perm.empty() ? nullptr : perm.data(), nullptr, 0, &common);
-  if (L == nullptr) {
+  if (ordering == MarginalsOrdering::kCholmodAuto) {
+    cholmod_sparse* A = lower_to_cholmod(Lambda, &common);
+    L = cholmod_analyze(A, &common);
+    if (L != nullptr) cholmod_factorize(A, L, &common);
     cholmod_free_sparse(&A, &common);
+    if (L != nullptr) {
+      const int* cholmod_perm = static_cast<const int*>(L->Perm);
+      perm.assign(cholmod_perm, cholmod_perm + n);
+    }
+  } else {
+    // CHOLMOD is handed C = P Λ Pᵀ (lower triangle) in the natural ordering: it then
+    // factors C as it is, where with a given ordering it would transpose Λ twice per
+    // factorisation (cholmod_factorize for stype < 0) and once more in the analysis.
+    perm = block_ordering(Lambda, block_dim, ordering, &common);
+    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> P(n);
+    for (int k = 0; k < n; ++k) P.indices()[perm[static_cast<size_t>(k)]] = k;
+    Eigen::SparseMatrix<double> C(n, n);
+    C.selfadjointView<Eigen::Lower>() = Lambda.selfadjointView<Eigen::Lower>().twistedBy(P);
+    C.makeCompressed();
+    cholmod_sparse view = lower_view(C);
+    common.nmethods = 1;
+    common.method[0].ordering = CHOLMOD_NATURAL;
+    common.postorder = 0;
+    L = cholmod_analyze(&view, &common);
+    if (L != nullptr && L->ordering != CHOLMOD_NATURAL) {
+      throw ExactMarginalsError("ExactMarginals: CHOLMOD reordered a pre-permuted matrix");
+    }
+    if (L != nullptr) cholmod_factorize(&view, L, &common);
+  }
+  if (L == nullptr) {
     throw ExactMarginalsError("ExactMarginals: CHOLMOD analyse failed (status " +
                               std::to_string(common.status) + ")");
   }
-  cholmod_factorize(A, L, &common);
-  cholmod_free_sparse(&A, &common);
   if (common.status == CHOLMOD_NOT_POSDEF || L->minor < L->n) {
     throw ExactMarginalsError(
         "ExactMarginals: information matrix is not positive definite "
@@ -171,9 +260,8 @@ void ExactMarginals::Impl::invert() {
       throw ExactMarginalsError("ExactMarginals: CHOLMOD supernode row indices are not sorted");
     }
   }
-  const int* Perm = static_cast<const int*>(L->Perm);
   inv_perm.assign(static_cast<size_t>(n), 0);
-  for (int k = 0; k < n; ++k) inv_perm[static_cast<size_t>(Perm[k])] = k;
+  for (int k = 0; k < n; ++k) inv_perm[static_cast<size_t>(perm[static_cast<size_t>(k)])] = k;
 
   // No zero fill: the recurrence writes every entry of every supernode (15 MB on sphere2500).
   sigma = std::make_unique_for_overwrite<double[]>(L->xsize);

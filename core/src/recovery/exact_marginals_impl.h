@@ -5,7 +5,8 @@
 // Storage: CHOLMOD's supernodal L. Supernode s owns the permuted columns super[s] ..
 // super[s+1]-1, a sorted row list (its own columns first) at rows() + pi[s], and a column-major
 // nrows x ncols value block at L->x + px[s]. The selected inverse `sigma` has the same layout,
-// its diagonal blocks stored in full. Permuted index k is original index Perm[k].
+// its diagonal blocks stored in full. Permuted index k is original index perm[k] (CHOLMOD
+// factors P Λ Pᵀ as given, in its natural ordering, unless the ordering is CHOLMOD's own).
 
 #include <cholmod.h>
 
@@ -30,6 +31,7 @@ struct ExactMarginals::Impl {
   cholmod_factor* L = nullptr;
   std::unique_ptr<double[]> sigma;  // same layout as L->x; every entry written by invert()
   std::vector<int> col_super;       // supernode of each (permuted) column
+  std::vector<int> perm;            // perm[permuted] = original
   std::vector<int> inv_perm;        // inv_perm[original] = permuted
   double factor_ms = 0.0;
   double inversion_ms = 0.0;

@@ -19,7 +19,7 @@ void ExactMarginals::Impl::solve(const Eigen::Ref<const Eigen::MatrixXd>& B,
       kernel == MarginalsKernel::kBaseline
           ? SupernodeSolveKernels{&baseline::lsolve_supernode, &baseline::ltsolve_supernode}
           : supernode_solve_kernels();
-  const int* Perm = static_cast<const int*>(L->Perm);
+  const int* Perm = perm.data();
   const auto* Lx = static_cast<const double*>(L->x);
   const int nsuper = static_cast<int>(L->nsuper);
   RowMajorMatrix& W = solve_work;

@@ -5,7 +5,6 @@
 #include <limits>
 #include <stdexcept>
 
-#include <Eigen/CholmodSupport>
 
 #include "nav/core/recovery/consistency.h"
 #include "nav/core/recovery/exact_marginals.h"
@@ -36,22 +35,20 @@ double logdet_or_nan(const core::Mat6& ours, const core::Mat6& exact) {
   }
 }
 
-/// The exact robot column Σ_{*0} = Λ⁻¹ E_0 by one sparse Cholesky solve (12 right-hand sides):
-/// with the exact marginals it gives every exact joint (0, i) without a solve per state.
-Eigen::MatrixXd exact_robot_column(const core::InformationMatrix& info) {
-  const Eigen::SparseMatrix<double> lambda = info.to_sparse();
-  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> llt(lambda);
-  if (llt.info() != Eigen::Success) throw std::runtime_error("Cholesky of the final Λ failed");
-  const Eigen::MatrixXd e0 = Eigen::MatrixXd::Identity(lambda.rows(), kD);
-  Eigen::MatrixXd column = llt.solve(e0);
-  if (llt.info() != Eigen::Success) throw std::runtime_error("robot column solve failed");
+/// The exact robot column Σ_{*0} = Λ⁻¹ E_0 by one solve with the factor of the exact marginals
+/// (12 right-hand sides): with the marginals it gives every exact joint (0, i) without a solve
+/// per state.
+Eigen::MatrixXd exact_robot_column(const core::ExactMarginals& exact, Eigen::Index dim) {
+  const Eigen::MatrixXd e0 = Eigen::MatrixXd::Identity(dim, kD);
+  Eigen::MatrixXd column(dim, kD);
+  exact.solve(e0, column);
   return column;
 }
 
 void logdet_rows(NavFilter& slam, const core::ExactMarginals& exact, const core::Vec12& robot,
                  const Eigen::VectorXd& mean, ReplayAnalysis& a) {
   const core::Esdf& esdf = slam.esdf();
-  const Eigen::MatrixXd column = exact_robot_column(esdf.information());
+  const Eigen::MatrixXd column = exact_robot_column(exact, esdf.information().dim());
   const Eigen::MatrixXd sigma_rr = exact.marginal(0);
   for (int i = 1; i < esdf.num_blocks(); ++i) {
     core::LinkProposal p;
