@@ -23,7 +23,7 @@
 // so every refresh analyses the pattern again (AMD on the block graph: a small part of the
 // factorisation's cost).
 //
-// Not thread-safe (CHOLMOD workspace): owned by the recovery thread.
+// Not thread-safe (the factor's solve workspace): owned by the recovery thread.
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
