@@ -94,13 +94,12 @@ cholmod_sparse lower_view(Eigen::SparseMatrix<double>& C) {
   return A;
 }
 
-/// `order` (order[k] = the block eliminated k-th) followed by a postorder of its elimination
-/// tree (Liu's algorithm with path compression, then a depth-first walk from the roots), so
-/// that every subtree, and hence every supernode, is a contiguous range of columns: the form
-/// CHOLMOD's supernodal analysis needs when it is given the natural ordering. `lower[j]` lists
-/// the blocks i > j with Λ_ij != 0 (original numbering).
-std::vector<int> postordered(const std::vector<int>& order,
-                             const std::vector<std::vector<int>>& lower) {
+/// Elimination tree of the block graph eliminated in `order` (order[k] = the block eliminated
+/// k-th; `lower[j]` lists the blocks i > j with Λ_ij != 0, original numbering): parent[k] of
+/// the k-th eliminated block, in elimination positions, -1 at a root. Liu's algorithm with
+/// path compression (Liu, SIAM J. Matrix Anal. Appl. 1990; CSparse's cs_etree).
+std::vector<int> elimination_tree(const std::vector<int>& order,
+                                  const std::vector<std::vector<int>>& lower) {
   const auto nb = order.size();
   std::vector<int> position(nb);
   for (size_t k = 0; k < nb; ++k) position[static_cast<size_t>(order[k])] = static_cast<int>(k);
@@ -112,20 +111,28 @@ std::vector<int> postordered(const std::vector<int>& order,
     }
   }
   std::vector<int> parent(nb, -1), ancestor(nb, -1);
-  for (size_t k = 0; k < nb; ++k) {
-    for (int i : earlier[k]) {
-      while (i != -1 && i < static_cast<int>(k)) {
+  for (int k = 0; k < static_cast<int>(nb); ++k) {
+    for (int i : earlier[static_cast<size_t>(k)]) {
+      while (i != -1 && i < k) {
         const int next = ancestor[static_cast<size_t>(i)];
-        ancestor[static_cast<size_t>(i)] = static_cast<int>(k);
-        if (next == -1) parent[static_cast<size_t>(i)] = static_cast<int>(k);
+        ancestor[static_cast<size_t>(i)] = k;
+        if (next == -1) parent[static_cast<size_t>(i)] = k;
         i = next;
       }
     }
   }
+  return parent;
+}
+
+/// A postorder of the forest `parent` (children before their parent, every subtree a
+/// contiguous range), by a depth-first walk from the roots.
+std::vector<int> postorder(const std::vector<int>& parent) {
+  const auto nb = parent.size();
   std::vector<std::vector<int>> children(nb);
   std::vector<int> roots;
   for (size_t k = 0; k < nb; ++k) {
-    (parent[k] < 0 ? roots : children[static_cast<size_t>(parent[k])]).push_back(static_cast<int>(k));
+    auto& siblings = parent[k] < 0 ? roots : children[static_cast<size_t>(parent[k])];
+    siblings.push_back(static_cast<int>(k));
   }
   std::vector<int> result, stack;
   result.reserve(nb);
@@ -137,10 +144,23 @@ std::vector<int> postordered(const std::vector<int>& order,
       if (next_child[top] < children[top].size()) {
         stack.push_back(children[top][next_child[top]++]);
       } else {
-        result.push_back(order[top]);
+        result.push_back(static_cast<int>(top));
         stack.pop_back();
       }
     }
+  }
+  return result;
+}
+
+/// `order` followed by a postorder of its elimination tree, so that every subtree, and hence
+/// every supernode, is a contiguous range of columns: the form CHOLMOD's supernodal analysis
+/// needs when it is given the natural ordering.
+std::vector<int> postordered(const std::vector<int>& order,
+                             const std::vector<std::vector<int>>& lower) {
+  std::vector<int> result;
+  result.reserve(order.size());
+  for (const int k : postorder(elimination_tree(order, lower))) {
+    result.push_back(order[static_cast<size_t>(k)]);
   }
   return result;
 }
@@ -195,6 +215,39 @@ std::vector<int> block_ordering(const Eigen::SparseMatrix<double>& Lambda, int b
 
 }  // namespace
 
+void ExactMarginals::Impl::factor_in_cholmod_ordering(const Eigen::SparseMatrix<double>& Lambda) {
+  cholmod_sparse* A = lower_to_cholmod(Lambda, &common);
+  L = cholmod_analyze(A, &common);
+  if (L != nullptr) cholmod_factorize(A, L, &common);
+  cholmod_free_sparse(&A, &common);
+  if (L != nullptr) {
+    const int* cholmod_perm = static_cast<const int*>(L->Perm);
+    perm.assign(cholmod_perm, cholmod_perm + n);
+  }
+}
+
+void ExactMarginals::Impl::factor_permuted(const Eigen::SparseMatrix<double>& Lambda,
+                                           MarginalsOrdering ordering) {
+  // CHOLMOD is handed C = P Λ Pᵀ (lower triangle) in the natural ordering: it then factors C as
+  // it is, where with a given ordering it would transpose Λ twice per factorisation
+  // (cholmod_factorize for stype < 0) and once more in the analysis.
+  perm = block_ordering(Lambda, block_dim, ordering, &common);
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> P(n);
+  for (int k = 0; k < n; ++k) P.indices()[perm[static_cast<size_t>(k)]] = k;
+  Eigen::SparseMatrix<double> C(n, n);
+  C.selfadjointView<Eigen::Lower>() = Lambda.selfadjointView<Eigen::Lower>().twistedBy(P);
+  C.makeCompressed();
+  cholmod_sparse view = lower_view(C);
+  common.nmethods = 1;
+  common.method[0].ordering = CHOLMOD_NATURAL;
+  common.postorder = 0;
+  L = cholmod_analyze(&view, &common);
+  if (L != nullptr && L->ordering != CHOLMOD_NATURAL) {
+    throw ExactMarginalsError("ExactMarginals: CHOLMOD reordered a pre-permuted matrix");
+  }
+  if (L != nullptr) cholmod_factorize(&view, L, &common);
+}
+
 void ExactMarginals::Impl::factor(const Eigen::SparseMatrix<double>& Lambda,
                                   MarginalsOrdering ordering) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -202,33 +255,9 @@ void ExactMarginals::Impl::factor(const Eigen::SparseMatrix<double>& Lambda,
   common.supernodal = CHOLMOD_SUPERNODAL;
   common.final_asis = 1;
   if (ordering == MarginalsOrdering::kCholmodAuto) {
-    cholmod_sparse* A = lower_to_cholmod(Lambda, &common);
-    L = cholmod_analyze(A, &common);
-    if (L != nullptr) cholmod_factorize(A, L, &common);
-    cholmod_free_sparse(&A, &common);
-    if (L != nullptr) {
-      const int* cholmod_perm = static_cast<const int*>(L->Perm);
-      perm.assign(cholmod_perm, cholmod_perm + n);
-    }
+    factor_in_cholmod_ordering(Lambda);
   } else {
-    // CHOLMOD is handed C = P Λ Pᵀ (lower triangle) in the natural ordering: it then
-    // factors C as it is, where with a given ordering it would transpose Λ twice per
-    // factorisation (cholmod_factorize for stype < 0) and once more in the analysis.
-    perm = block_ordering(Lambda, block_dim, ordering, &common);
-    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> P(n);
-    for (int k = 0; k < n; ++k) P.indices()[perm[static_cast<size_t>(k)]] = k;
-    Eigen::SparseMatrix<double> C(n, n);
-    C.selfadjointView<Eigen::Lower>() = Lambda.selfadjointView<Eigen::Lower>().twistedBy(P);
-    C.makeCompressed();
-    cholmod_sparse view = lower_view(C);
-    common.nmethods = 1;
-    common.method[0].ordering = CHOLMOD_NATURAL;
-    common.postorder = 0;
-    L = cholmod_analyze(&view, &common);
-    if (L != nullptr && L->ordering != CHOLMOD_NATURAL) {
-      throw ExactMarginalsError("ExactMarginals: CHOLMOD reordered a pre-permuted matrix");
-    }
-    if (L != nullptr) cholmod_factorize(&view, L, &common);
+    factor_permuted(Lambda, ordering);
   }
   if (L == nullptr) {
     throw ExactMarginalsError("ExactMarginals: CHOLMOD analyse failed (status " +

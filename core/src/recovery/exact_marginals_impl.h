@@ -64,6 +64,8 @@ struct ExactMarginals::Impl {
   }
 
   void factor(const Eigen::SparseMatrix<double>& Lambda, MarginalsOrdering ordering);
+  void factor_in_cholmod_ordering(const Eigen::SparseMatrix<double>& Lambda);
+  void factor_permuted(const Eigen::SparseMatrix<double>& Lambda, MarginalsOrdering ordering);
   void invert();
   /// X = Lambda⁻¹ B (n x m, any strides) by a forward and a backward supernodal triangular
   /// solve with L (exact_marginals_solve.cpp). Uses the workspace above.
