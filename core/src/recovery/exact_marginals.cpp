@@ -297,9 +297,8 @@ void ExactMarginals::Impl::invert() {
   const int max_below = static_cast<int>(L->maxesize);
   Eigen::MatrixXd srr_buffer(std::max(max_below, 1), std::max(max_below, 1));
   std::vector<int> map(static_cast<size_t>(std::max(max_below, 1)));
-  const SelinvSupernodeKernel dense_kernel = kernel == MarginalsKernel::kBaseline
-                                           ? &baseline::selinv_supernode
-                                           : selinv_supernode_kernel();
+  const SelinvSupernodeKernel dense_kernel =
+      selinv_supernode_kernel(kernel == MarginalsKernel::kBaseline);
 
   for (int s = nsuper - 1; s >= 0; --s) {
     const int k1 = super()[s];

@@ -16,9 +16,7 @@ void ExactMarginals::Impl::solve(const Eigen::Ref<const Eigen::MatrixXd>& B,
                                  Eigen::Ref<Eigen::MatrixXd> X) const {
   const auto m = static_cast<int>(B.cols());
   const SupernodeSolveKernels kernels =
-      kernel == MarginalsKernel::kBaseline
-          ? SupernodeSolveKernels{&baseline::lsolve_supernode, &baseline::ltsolve_supernode}
-          : supernode_solve_kernels();
+      supernode_solve_kernels(kernel == MarginalsKernel::kBaseline);
   const int* Perm = perm.data();
   const auto* Lx = static_cast<const double*>(L->x);
   const int nsuper = static_cast<int>(L->nsuper);

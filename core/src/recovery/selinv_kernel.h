@@ -45,11 +45,11 @@ struct SupernodeSolveKernels {
   LtsolveSupernodeKernel ltsolve;
 };
 
-/// The AVX2+FMA kernel when this CPU has both (and it was compiled), else the baseline one.
-/// Chosen once per process.
-SelinvSupernodeKernel selinv_supernode_kernel();
-SupernodeSolveKernels supernode_solve_kernels();
-/// "avx2-fma" or "baseline": what selinv_supernode_kernel() returns here.
+/// The AVX2+FMA kernels when this CPU has both (and they were compiled) and `baseline_only` is
+/// false, else the baseline ones. The CPU check runs once per process.
+SelinvSupernodeKernel selinv_supernode_kernel(bool baseline_only);
+SupernodeSolveKernels supernode_solve_kernels(bool baseline_only);
+/// "avx2-fma" or "baseline": what selinv_supernode_kernel(false) returns here.
 const char* selinv_kernel_name();
 
 }  // namespace nav::core

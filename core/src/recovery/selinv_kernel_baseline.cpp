@@ -19,16 +19,16 @@ const bool kUseAvx2 = cpu_has_avx2_fma();
 
 }  // namespace
 
-SelinvSupernodeKernel selinv_supernode_kernel() {
+SelinvSupernodeKernel selinv_supernode_kernel(bool baseline_only) {
 #if defined(NAV_SELINV_HAVE_AVX2)
-  if (kUseAvx2) return &avx2::selinv_supernode;
+  if (kUseAvx2 && !baseline_only) return &avx2::selinv_supernode;
 #endif
   return &baseline::selinv_supernode;
 }
 
-SupernodeSolveKernels supernode_solve_kernels() {
+SupernodeSolveKernels supernode_solve_kernels(bool baseline_only) {
 #if defined(NAV_SELINV_HAVE_AVX2)
-  if (kUseAvx2) return {&avx2::lsolve_supernode, &avx2::ltsolve_supernode};
+  if (kUseAvx2 && !baseline_only) return {&avx2::lsolve_supernode, &avx2::ltsolve_supernode};
 #endif
   return {&baseline::lsolve_supernode, &baseline::ltsolve_supernode};
 }

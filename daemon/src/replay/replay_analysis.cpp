@@ -5,7 +5,6 @@
 #include <limits>
 #include <stdexcept>
 
-
 #include "nav/core/recovery/consistency.h"
 #include "nav/core/recovery/exact_marginals.h"
 #include "nav/core/recovery/markov_blanket.h"
