@@ -46,6 +46,7 @@ struct CovarianceArgs {
   bool direct = false;
   bool json = false;
   bool no_certify = false;
+  bool no_old_state_energy = false;
   bool csr = false;
   std::string kernel = "packed";
   bool no_markov_blanket = false;
@@ -57,7 +58,7 @@ struct CovarianceArgs {
                               ///< every step, for bit-identical checkpoints)
   double refresh_residual = core::StateRecoveryOptions{}.refresh_residual;
   int iterations_after_refresh = core::StateRecoveryOptions{}.iterations_after_refresh;
-  double exact_refresh_margin = core::BoundsOptions{}.exact_refresh_margin;
+  double rounding_margin = core::BoundsOptions{}.rounding_margin;
   int checks = 100;  ///< time-of-use check times spread over the run
 };
 
@@ -221,7 +222,8 @@ core::ReplayOptions replay_options(const CovarianceArgs& a) {
   o.recovery.refresh_residual = a.refresh_residual;
   o.recovery.iterations_after_refresh = a.iterations_after_refresh;
   o.bounds.certify_truncation = !a.no_certify;
-  o.bounds.exact_refresh_margin = a.exact_refresh_margin;
+  o.bounds.old_state_energy = !a.no_old_state_energy;
+  o.bounds.rounding_margin = a.rounding_margin;
   o.recovery_operator =
       a.csr ? core::RecoveryOperator::kCsrSnapshot : core::RecoveryOperator::kInformationMatrix;
   return o;
@@ -343,7 +345,8 @@ void run_covariance(const CovarianceArgs& args) {
           : json(static_cast<double>(time_of_use.markov_blanket_overconfident) /
                  static_cast<double>(time_of_use.markov_blanket.size()));
   out["certified_bounds"] = options.bounds.certify_truncation;
-  out["exact_refresh_margin"] = options.bounds.exact_refresh_margin;
+  out["certificate_old_state_energy"] = options.bounds.old_state_energy;
+  out["rounding_margin"] = options.bounds.rounding_margin;
   out["operator"] = args.csr ? "csr-snapshot" : "information-matrix";
   out["kernel"] = core::to_string(options.recovery.kernel);
   out["broken_chain_vertices"] = replay.broken_chain_vertices();
@@ -432,6 +435,8 @@ void add_covariance(CLI::App& app) {
   cmd->add_flag("--json", args->json, "one JSON object on stdout (else a summary on stderr)");
   cmd->add_flag("--no-certify", args->no_certify,
                 "the paper's uninflated bounds (not conservative under truncated CG)");
+  cmd->add_flag("--no-old-state-energy", args->no_old_state_energy,
+                "certify with K1/K2 only, not with the factor's K3 (comparison)");
   cmd->add_flag("--csr", args->csr,
                 "recover on a CSR snapshot per step instead of the block matrix");
   cmd->add_option("--kernel", args->kernel,
@@ -452,9 +457,9 @@ void add_covariance(CLI::App& app) {
                   "factor: at most this many PCG iterations in a step that refactored (default 1: "
                   "M = Λ then, one iteration is the direct solve)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--exact-refresh-margin", args->exact_refresh_margin,
-                  "factor: relative margin τ over the exact marginals of a refresh (default "
-                  "1e-6; bounds.h)")
+  cmd->add_option("--rounding-margin", args->rounding_margin,
+                  "relative rounding margin τ: over the exact marginals of a refresh and as the "
+                  "floor of the certificate's κ (default 1e-6; bounds.h)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--checks", args->checks,
                   "time-of-use checks (relative-pose Fig. 3, bounds vs exact) spread evenly "

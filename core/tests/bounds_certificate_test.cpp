@@ -40,8 +40,8 @@ Problem make_problem(unsigned seed) {
 }
 
 /// Bounds whose every block is the exact marginal (refresh_exact of the dense Λ).
-CovarianceBounds exact_bounds(const Problem& p) {
-  CovarianceBounds bounds(p.d);
+CovarianceBounds exact_bounds(const Problem& p, BoundsOptions options = {}) {
+  CovarianceBounds bounds(p.d, options);
   EXPECT_TRUE(bounds.initialize_robot(p.sigma.topLeftCorner(p.d, p.d)).ok());
   for (int i = 1; i < p.blocks; ++i) EXPECT_TRUE(bounds.insert(i).ok());
   const Eigen::SparseMatrix<double> sparse = p.lambda.sparseView();
@@ -108,7 +108,9 @@ TEST(BoundsCertificate, KappaVanishesWithTheResidualAndK2BeatsK1OnMixedUnits) {
   Eigen::MatrixXd E_r = Eigen::MatrixXd::Zero(n, p.d);
   E_r.topRows(p.d).setIdentity();
   const Eigen::MatrixXd R = E_r - p.lambda * X;
-  CovarianceBounds with_matrix = exact_bounds(p), with_norm = exact_bounds(p);
+  BoundsOptions unfloored;  // the algebra alone: κ not floored at the rounding margin
+  unfloored.rounding_margin = 0.0;
+  CovarianceBounds with_matrix = exact_bounds(p, unfloored), with_norm = exact_bounds(p, unfloored);
   ASSERT_TRUE(with_matrix.set_recovery(X.topRows(p.d), R, p.blocks).ok());
   const double rho = Eigen::JacobiSVD<Eigen::MatrixXd>(R).singularValues()[0];
   ASSERT_TRUE(with_norm.set_recovery(X.topRows(p.d), rho, p.blocks).ok());
@@ -116,10 +118,15 @@ TEST(BoundsCertificate, KappaVanishesWithTheResidualAndK2BeatsK1OnMixedUnits) {
   EXPECT_LT(with_matrix.kappa(), 1e-6);
   // K1 sums λmax over m² and rad² blocks alike: it is orders of magnitude looser here.
   EXPECT_LT(100.0 * with_matrix.kappa(), with_norm.kappa());
-  // A zero residual certifies the recovered column as it is.
-  CovarianceBounds exact = exact_bounds(p);
+  // A zero residual certifies the recovered column as it is; by default κ keeps the rounding
+  // margin (the computed residual cannot see the solve's rounding).
+  CovarianceBounds exact = exact_bounds(p, unfloored);
   ASSERT_TRUE(exact.set_recovery(X.topRows(p.d), Eigen::MatrixXd::Zero(n, p.d), p.blocks).ok());
   EXPECT_EQ(exact.kappa(), 0.0);
+  CovarianceBounds floored = exact_bounds(p);
+  ASSERT_TRUE(floored.set_recovery(X.topRows(p.d), Eigen::MatrixXd::Zero(n, p.d), p.blocks).ok());
+  EXPECT_EQ(floored.kappa(), floored.options().rounding_margin);
+  EXPECT_GT(floored.kappa(), 0.0);
   // A residual of the wrong shape is refused.
   EXPECT_EQ(exact.set_recovery(X.topRows(p.d), Eigen::MatrixXd::Zero(n - 1, p.d), p.blocks).code(),
             StatusCode::kInvalidArgument);
@@ -128,7 +135,7 @@ TEST(BoundsCertificate, KappaVanishesWithTheResidualAndK2BeatsK1OnMixedUnits) {
 TEST(BoundsCertificate, ExactRefreshIsTheMarginalPlusTheMargin) {
   const Problem p = make_problem(5);
   CovarianceBounds bounds = exact_bounds(p);
-  const double tau = bounds.options().exact_refresh_margin;
+  const double tau = bounds.options().rounding_margin;
   for (int i = 1; i < p.blocks; ++i) {
     const Eigen::MatrixXd sigma_ii = p.sigma.block(i * p.d, i * p.d, p.d, p.d);
     EXPECT_TRUE(is_conservative(bounds.bound(i), sigma_ii, 0.0)) << "state " << i;

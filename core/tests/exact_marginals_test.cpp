@@ -106,8 +106,9 @@ TEST(ExactMarginals, RandomSparseMatchesDenseInverse) {
 }
 
 TEST(ExactMarginals, SolveMatchesDenseSolveForEveryKernelAndOrdering) {
-  // The supernodal triangular solves against a dense LLT, on strided views (as the factor
-  // preconditioner passes them) and for 1, 13 (the recovery's [η | E_r]) and 40 columns.
+  // The supernodal triangular solves (and the forward half's quadratic form) against a dense
+  // LLT, on strided views (as the factor preconditioner passes them) and for 1, 13 (the
+  // recovery's [η | E_r]) and 40 columns.
   std::mt19937 rng(5);
   std::normal_distribution<double> normal;
   for (const int blocks : {1, 25, 120}) {
@@ -129,6 +130,10 @@ TEST(ExactMarginals, SolveMatchesDenseSolveForEveryKernelAndOrdering) {
               << blocks << " blocks, " << m << " columns";
           em.solve(B, X);  // workspace reused
           EXPECT_LE(max_abs_diff(X, expected), 1e-10 * expected.cwiseAbs().maxCoeff());
+          // The forward half alone: Bᵀ Λ⁻¹ B.
+          const Eigen::MatrixXd form = Eigen::MatrixXd(B).transpose() * expected;
+          EXPECT_LE(max_abs_diff(em.quadratic_form(B), form), 1e-10 * form.cwiseAbs().maxCoeff())
+              << blocks << " blocks, " << m << " columns";
           EXPECT_EQ(X_storage(0, 0), 7.0) << "wrote outside the view";
           EXPECT_EQ(X_storage(1, m), 7.0) << "wrote outside the view";
         }

@@ -46,8 +46,10 @@ bool NavFilter::certify(const RecoveryResult& result) {
            " us skipped: " + s.to_string());
     }
   }
+  std::function<OldStateEnergy()> old_states;  // K3 of the certificate, a solve: lazily
+  if (bounds_.options().old_state_energy) old_states = [&] { return recovery_.old_state_energy(); };
   if (Status s = bounds_.set_recovery(recovery_.robot_covariance(), recovery_.column_residual(),
-                                      filter_.num_blocks());
+                                      filter_.num_blocks(), old_states);
       !s.ok()) {
     ++counters_.recovery_failures;
     warn("NavFilter: bounds certificate at t = " + std::to_string(time_us_) +

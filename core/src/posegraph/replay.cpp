@@ -181,8 +181,10 @@ RecoveryResult PoseGraphReplay::recover() {
     result.status = bounds_.refresh_exact(*recovery_.refreshed_marginals(), filter_.num_blocks());
     if (!result.status.ok()) return result;
   }
+  std::function<OldStateEnergy()> old_states;  // K3 of the certificate, a solve: lazily
+  if (bounds_.options().old_state_energy) old_states = [&] { return recovery_.old_state_energy(); };
   result.status = bounds_.set_recovery(recovery_.robot_covariance(), recovery_.column_residual(),
-                                       filter_.num_blocks());
+                                       filter_.num_blocks(), old_states);
   return result;
 }
 

@@ -22,12 +22,18 @@ std::string shape(const Eigen::MatrixXd& m) {
   return std::to_string(m.rows()) + "x" + std::to_string(m.cols());
 }
 
-}  // namespace
-
-double lambda_max_symmetric(const Eigen::MatrixXd& m) {
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(symmetric(m), Eigen::EigenvaluesOnly);
-  return solver.eigenvalues().maxCoeff();
+/// (1 + τ) S + τ diag|S| of a symmetric S: the rounding margin of a quantity computed with a
+/// factor of Λ (exact refresh, K3 energy). Scaled by the diagonal (each variance in its own
+/// unit): |Δ_kl| <= τ sqrt(S_kk S_ll) / d is covered, since d·diag(S) − Δ is diagonally
+/// dominant after the diagonal scaling.
+Eigen::MatrixXd padded(const Eigen::MatrixXd& sigma, double tau) {
+  const Eigen::MatrixXd s = symmetric(sigma);
+  Eigen::MatrixXd out = (1.0 + tau) * s;
+  out.diagonal() += tau * s.diagonal().cwiseAbs();
+  return out;
 }
+
+}  // namespace
 
 CovarianceBounds::CovarianceBounds(int block_dim, BoundsOptions options)
     : block_dim_(block_dim), options_(options) {
@@ -121,14 +127,6 @@ Status CovarianceBounds::insert(int state) {
   return Status::Ok();
 }
 
-double lambda_max_scaled(const Eigen::MatrixXd& G, const Eigen::MatrixXd& W) {
-  // λmax(W^-½ G W^-½) = largest generalised eigenvalue of G v = λ W v (W SPD).
-  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> solver(symmetric(G), symmetric(W),
-                                                                   Eigen::EigenvaluesOnly);
-  if (solver.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
-  return std::max(0.0, solver.eigenvalues().maxCoeff());
-}
-
 Status CovarianceBounds::set_recovery(const Eigen::MatrixXd& sigma_rr, double residual_frobenius,
                                       int num_states) {
   // (K1) with ‖R‖₂ <= ρ only: Rᵀ Σ R <= L ρ² I.
@@ -141,7 +139,8 @@ Status CovarianceBounds::set_recovery(const Eigen::MatrixXd& sigma_rr, double re
 
 Status CovarianceBounds::set_recovery(const Eigen::MatrixXd& sigma_rr,
                                       const Eigen::Ref<const Eigen::MatrixXd>& residual,
-                                      int num_states) {
+                                      int num_states,
+                                      const std::function<OldStateEnergy()>& old_states) {
   const int d = block_dim_;
   if (residual.rows() != Eigen::Index{num_states} * d || residual.cols() != d ||
       !residual.allFinite()) {
@@ -153,16 +152,44 @@ Status CovarianceBounds::set_recovery(const Eigen::MatrixXd& sigma_rr,
   }
   const Eigen::MatrixXd gram = residual.transpose() * residual;
   const double spectral = std::sqrt(std::max(0.0, lambda_max_symmetric(gram)));
-  return set_recovery_with(sigma_rr, spectral, num_states, [&](const Eigen::MatrixXd& W) {
-    // (K2): Rᵀ Σ R <= n Σ_j R_jᵀ B_jj R_j; (K1): Rᵀ Σ R <= L RᵀR. Both hold: take the smaller.
-    Eigen::MatrixXd scaled = residual.topRows(d).transpose() * W * residual.topRows(d);
-    for (int j = 1; j < num_states; ++j) {
-      const auto R_j = residual.middleRows(Eigen::Index{j} * d, d);
-      scaled.noalias() += R_j.transpose() * entries_[static_cast<size_t>(j)].bound * R_j;
+  Status energy_status = Status::Ok();
+  const Status s = set_recovery_with(sigma_rr, spectral, num_states, [&](const Eigen::MatrixXd& W) {
+    const double k12 = std::min(certificate_lambda_ * lambda_max_scaled(gram, W),
+                                num_states * lambda_max_scaled(weighted_residual(residual, 0, num_states, W), W));
+    const double floor = options_.rounding_margin * options_.rounding_margin;
+    if (!old_states || k12 <= floor) return k12;
+    const OldStateEnergy old = old_states();
+    if (old.old_end == 0) return k12;
+    if (old.old_end < 1 || old.old_end > num_states || old.energy.rows() != d ||
+        old.energy.cols() != d || !finite(old.energy)) {
+      energy_status = Status::Error(
+          StatusCode::kInvalidArgument,
+          "CovarianceBounds::set_recovery: old-state energy of blocks [1, " +
+              std::to_string(old.old_end) + ") is " + shape(old.energy) + ", expected finite " +
+              std::to_string(d) + "x" + std::to_string(d) + " and at most " +
+              std::to_string(num_states) + " blocks");
+      return k12;
     }
-    return std::min(num_states * lambda_max_scaled(scaled, W),
-                    certificate_lambda_ * lambda_max_scaled(gram, W));
+    // K3 (certificate.h): O = [1, old_end), T = {0} ∪ [old_end, n).
+    const double a = lambda_max_scaled(padded(old.energy, options_.rounding_margin), W);
+    const double b = (1 + num_states - old.old_end) *
+                     lambda_max_scaled(weighted_residual(residual, old.old_end, num_states, W), W);
+    return std::min(k12, kappa_squared_split(a, b));
   });
+  return s.ok() ? energy_status : s;
+}
+
+Eigen::MatrixXd CovarianceBounds::weighted_residual(const Eigen::Ref<const Eigen::MatrixXd>& R,
+                                                    int first, int last,
+                                                    const Eigen::MatrixXd& W) const {
+  // R_0ᵀ W R_0 + Σ_{j in [max(first, 1), last)} R_jᵀ B_jj R_j: the robot and blocks [first, last).
+  const int d = block_dim_;
+  Eigen::MatrixXd sum = R.topRows(d).transpose() * W * R.topRows(d);
+  for (int j = std::max(first, 1); j < last; ++j) {
+    const auto R_j = R.middleRows(Eigen::Index{j} * d, d);
+    sum.noalias() += R_j.transpose() * entries_[static_cast<size_t>(j)].bound * R_j;
+  }
+  return sum;
 }
 
 Status CovarianceBounds::set_recovery_with(
@@ -195,6 +222,7 @@ Status CovarianceBounds::set_recovery_with(
   }
   kappa_ = residual_frobenius > 0.0 ? std::sqrt(std::max(0.0, kappa_squared(robot_bound_))) : 0.0;
   if (!std::isfinite(kappa_)) kappa_ = std::numeric_limits<double>::max();
+  kappa_ = std::max(kappa_, options_.rounding_margin);
   const Eigen::MatrixXd candidate = sigma_rr_hat_ + kappa_ * certificate_robot_bound_;
   if (candidate.trace() < robot_bound_.trace()) set_robot_bound(candidate);
   return Status::Ok();
@@ -211,20 +239,12 @@ Status CovarianceBounds::refresh_exact(const ExactMarginals& exact, int num_stat
                              std::to_string(block_dim_) + " with " + std::to_string(num_bounds_) +
                              " bounds");
   }
-  const double tau = options_.exact_refresh_margin;
-  auto padded = [&](const Eigen::MatrixXd& sigma) {
-    // Scaled by the diagonal (each variance in its own unit): |Δ_kl| <= τ sqrt(Σ_kk Σ_ll) / d
-    // is covered, since d·diag(Σ) - Δ is diagonally dominant after the diagonal scaling.
-    const Eigen::MatrixXd s = symmetric(sigma);
-    Eigen::MatrixXd out = (1.0 + tau) * s;
-    out.diagonal() += tau * s.diagonal().cwiseAbs();
-    return out;
-  };
-  set_robot_bound(padded(exact.marginal(0)));
+  const double tau = options_.rounding_margin;
+  set_robot_bound(padded(exact.marginal(0), tau));
   for (int j = 1; j < num_states; ++j) {
     Entry& e = entries_[static_cast<size_t>(j)];
     lambda_sum_ -= e.lambda_max;
-    e.bound = padded(exact.marginal(j));
+    e.bound = padded(exact.marginal(j), tau);
     e.lambda_max = std::max(0.0, lambda_max_symmetric(e.bound));
     lambda_sum_ += e.lambda_max;
     e.snapshot_bound.resize(0, 0);
@@ -253,8 +273,6 @@ Status CovarianceBounds::propose(int state, const Eigen::MatrixXd& sigma_ir,
   const Eigen::MatrixXd& snapshot_bound = tightened_now ? e.snapshot_bound : e.bound;
   const int d = block_dim_;
   proposal->state = state;
-  proposal->epsilon_robot = 0.0;
-  proposal->epsilon_state = 0.0;
   proposal->kappa = kappa_;
   proposal->joint.resize(2 * d, 2 * d);
   proposal->joint.topLeftCorner(d, d) = sigma_rr_hat_ + (2.0 * kappa_) * certificate_robot_bound_;

@@ -70,6 +70,8 @@ struct ExactMarginals::Impl {
   /// X = Lambda⁻¹ B (n x m, any strides) by a forward and a backward supernodal triangular
   /// solve with L (exact_marginals_solve.cpp). Uses the workspace above.
   void solve(const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::Ref<Eigen::MatrixXd> X) const;
+  /// The forward half: solve_work = Y with L Y = P B (n x m, row-major).
+  void forward(const Eigen::Ref<const Eigen::MatrixXd>& B) const;
 };
 
 }  // namespace nav::core

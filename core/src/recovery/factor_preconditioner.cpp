@@ -89,4 +89,16 @@ void FactorPreconditioner::apply(const Eigen::Ref<const Eigen::MatrixXd>& R,
   Z.bottomRows(after) = tail_rhs_.bottomRows(after);
 }
 
+OldStateEnergy FactorPreconditioner::old_state_energy(
+    const Eigen::Ref<const Eigen::MatrixXd>& R) const {
+  OldStateEnergy out;
+  const Eigen::Index n0 = factored_dim_, d = block_dim_;
+  if (!factor_ || R.rows() < n0 || n0 <= d) return out;
+  rhs_ = R.topRows(n0);
+  rhs_.topRows(d).setZero();  // Λ₀'s robot is not a state of the current Λ
+  out.energy = factor_->quadratic_form(rhs_);
+  out.old_end = static_cast<int>(n0 / d);
+  return out;
+}
+
 }  // namespace nav::core

@@ -99,6 +99,9 @@ Status StateRecovery::initialize(const Eigen::VectorXd& x0, const Eigen::MatrixX
   solution_.resize(block_dim_, 1 + block_dim_);
   solution_.col(0) = x0;
   solution_.rightCols(block_dim_) = 0.5 * (P0 + P0.transpose());
+  factor_.reset();
+  solves_since_refresh_ = 0;
+  last_column_residual_ = 0.0;
   return Status::Ok();
 }
 

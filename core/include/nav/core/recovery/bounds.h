@@ -18,9 +18,8 @@
 // from the TRUE residual R = E_r - Λ X of the recovered column X = Σ^_{*r} (n x d). The error
 // E = Σ_{*r} - X = Σ R; with W = B_rr >= Σ_rr and B_ii >= Σ_ii, for the rows E_i of block i
 //   ‖B_ii^-½ E_i W^-½‖₂ <= ‖Σ^½ R W^-½‖₂ =: κ̄,   κ̄² = λmax(W^-½ Rᵀ Σ R W^-½),
-// and Rᵀ Σ R is bounded without Λ⁻¹ by (K1) L RᵀR, L = Σ_j λmax(B_jj) >= λmax(Σ), or (K2)
-// n Σ_j R_jᵀ B_jj R_j (n blocks; D = blkdiag(B_jj) has λmax(D^-½ Σ D^-½) <= n). κ = the
-// square root of the smaller: a factor on the blocks themselves, no m² added to rad². The
+// bounded without Λ⁻¹ by K1, K2 or K3 (certificate.h); κ = the square root of the smallest: a
+// factor on the blocks themselves, no m² added to rad². The
 // certified joint of a proposal r <-> i is
 //   J~ = [sym(X_rr) + 2κ W,  X_irᵀ ;  X_ir,  (1 + κ) Σ~_ii]  >=  J  (PSD difference),
 // whatever the residual (derivation: docs/consistency.md "The certificate"); the robot bound
@@ -47,6 +46,7 @@
 #include <functional>
 #include <vector>
 
+#include "nav/core/recovery/certificate.h"
 #include "nav/core/recovery/exact_marginals.h"
 #include "nav/core/status.h"
 
@@ -56,18 +56,20 @@ struct BoundsOptions {
   /// Inflate by the certified error of a truncated recovery (see the file comment). false =
   /// the paper's uninflated Algorithm 1 (for measuring what truncation does to it).
   bool certify_truncation = true;
-  /// refresh_exact: Σ~ = (1 + τ) Σ + τ diag(Σ) over the exact marginal Σ (rounding of the
-  /// selected inversion, relative to each variance's own scale; 1e-8 was measured too small at
-  /// κ(Λ) ≈ 1e14: docs/consistency.md "Exact refresh").
-  double exact_refresh_margin = 1e-6;
+  /// τ, the relative rounding of quantities solved with Λ (κ(Λ) ≈ 1e14 on pose graphs):
+  /// refresh_exact stores (1 + τ) Σ + τ diag(Σ) over the selected inverse Σ, and κ >= τ when
+  /// certifying, as the computed residual cannot see the solve's rounding (1e-8 measured too
+  /// small for both: docs/consistency.md "Exact refresh", "The certificate").
+  double rounding_margin = 1e-6;
+  /// Certify with K3 (certificate.h) when the recovery has a factor; false: K1/K2 only (the
+  /// comparison of docs/consistency.md). Read by the callers that compute its input.
+  bool old_state_energy = true;
 };
 
 /// The joint used for a link proposal between the robot r and state i (paper eq. 6).
 struct LinkProposal {
   int state = -1;            ///< i
   Eigen::MatrixXd joint;     ///< 2d x 2d [Σ_rr Σ_ri; Σ_ir Σ~_ii], certified (file comment)
-  double epsilon_robot = 0;  ///< always 0: the isotropic ε I is replaced by κ (kept for source
-  double epsilon_state = 0;  ///< compatibility of callers)
   double kappa = 0;          ///< κ of the certified joint (0 when not certifying)
 };
 
@@ -106,9 +108,12 @@ class CovarianceBounds {
   /// robot bound (certifying) or sets it to Σ^_rr (not certifying).
   Status set_recovery(const Eigen::MatrixXd& sigma_rr, double residual_frobenius, int num_states);
   /// Same with the true residual matrix R = E_r - ΛX (n x d, StateRecovery::column_residual()):
-  /// κ by the smaller of (K1) and (K2).
+  /// κ by the smallest of K1, K2 and K3, whose input `old_states` (e.g. StateRecovery::
+  /// old_state_energy, a solve) is called only when K1 and K2 are above the rounding margin.
+  /// kInvalidArgument if its result does not fit (old_end > num_states, energy not d x d).
   Status set_recovery(const Eigen::MatrixXd& sigma_rr,
-                      const Eigen::Ref<const Eigen::MatrixXd>& residual, int num_states);
+                      const Eigen::Ref<const Eigen::MatrixXd>& residual, int num_states,
+                      const std::function<OldStateEnergy()>& old_states = {});
   /// κ of the last set_recovery (0 when not certifying).
   double kappa() const { return kappa_; }
 
@@ -147,8 +152,7 @@ class CovarianceBounds {
   const Eigen::MatrixXd& robot_bound() const { return robot_bound_; }
   /// L = Σ_j λmax(B_jj) >= λmax(Σ) of the current bounds (valid while the bounds are).
   double lambda_max_sigma_bound() const { return lambda_sum_ + robot_lambda_max_; }
-  /// L frozen at the last set_recovery (the one the certificate uses).
-  double certificate_lambda() const { return certificate_lambda_; }
+  double certificate_lambda() const { return certificate_lambda_; }  ///< L of the certificate
   int num_bounds() const { return num_bounds_; }
   /// Both ways; reading replaces the bounds and requires every bound to belong to a delayed
   /// state 1..num_filter_blocks-1 (core/serialization/map_serialization.h, section "BNDS").
@@ -170,6 +174,9 @@ class CovarianceBounds {
   static bool joseph(const Eigen::MatrixXd& joint, const Eigen::MatrixXd& H,
                      const Eigen::MatrixXd& R, Eigen::MatrixXd* posterior);
   void set_robot_bound(const Eigen::MatrixXd& bound);
+  /// R_0ᵀ W R_0 + Σ R_jᵀ B_jj R_j, j in [max(first, 1), last): K2, and K3's T part.
+  Eigen::MatrixXd weighted_residual(const Eigen::Ref<const Eigen::MatrixXd>& R, int first,
+                                    int last, const Eigen::MatrixXd& W) const;
   /// set_recovery's common part; kappa_squared(W) returns an upper bound of κ̄².
   Status set_recovery_with(const Eigen::MatrixXd& sigma_rr, double residual_frobenius,
                            int num_states,
@@ -189,10 +196,5 @@ class CovarianceBounds {
   double certificate_lambda_ = 0.0;  // L frozen at set_recovery
   long epoch_ = 0;                   // incremented by set_recovery
 };
-
-/// λmax of a symmetric matrix (self-adjoint eigen-solve; for small blocks).
-double lambda_max_symmetric(const Eigen::MatrixXd& m);
-/// λmax(W^-½ G W^-½) for symmetric G and SPD W (generalised eigen-solve); +inf if it fails.
-double lambda_max_scaled(const Eigen::MatrixXd& G, const Eigen::MatrixXd& W);
 
 }  // namespace nav::core

@@ -91,6 +91,9 @@ class ExactMarginals {
   /// recovery/factor_preconditioner.h. Throws ExactMarginalsError on a size mismatch (naming
   /// both sizes). Uses the object's solve workspace (not thread-safe).
   void solve(const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::Ref<Eigen::MatrixXd> X) const;
+  /// Bᵀ Lambda⁻¹ B (m x m, symmetric) by the forward solve only (half of solve()'s work):
+  /// the certificate's residual energy (recovery/bounds.h). Same errors and workspace as solve.
+  Eigen::MatrixXd quadratic_form(const Eigen::Ref<const Eigen::MatrixXd>& B) const;
 
   /// True when every entry of the off-diagonal block (a, b) lies in the pattern of L, i.e.
   /// joint(a, b) needs no solve.

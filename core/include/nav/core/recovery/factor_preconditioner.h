@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "nav/core/filter/information_matrix.h"
+#include "nav/core/recovery/certificate.h"
 #include "nav/core/recovery/exact_marginals.h"
 #include "nav/core/recovery/pcg.h"
 #include "nav/core/status.h"
@@ -67,6 +68,11 @@ class FactorPreconditioner final : public Preconditioner {
   Eigen::Index dim() const override { return dim_; }
   /// The exact marginals of the last refresh (null without a factor).
   const ExactMarginals* marginals() const { return factor_.get(); }
+  /// The certificate's K3 input (certificate.h) for a residual R (n x d, n >= the factored
+  /// dimension): R_Oᵀ Σ₀_OO R_O over the rows of blocks O = [1, k), k = the factored blocks
+  /// (Λ₀'s robot, block 0, left out), by one forward solve with the factor. old_end = 0
+  /// without a factor or when R is shorter than Λ₀.
+  OldStateEnergy old_state_energy(const Eigen::Ref<const Eigen::MatrixXd>& R) const;
 
   void apply(const Eigen::Ref<const Eigen::MatrixXd>& R,
              Eigen::Ref<Eigen::MatrixXd> Z) const override;

@@ -129,7 +129,8 @@ class StateRecovery {
   const StateRecoveryOptions& options() const { return options_; }
   Status set_options(const StateRecoveryOptions& options);
 
-  /// Starts with one state (the robot): μ = x0, Σ_{*r} = P0 (exact for the prior (x0, P0)).
+  /// Starts with one state (the robot): μ = x0, Σ_{*r} = P0 (exact for the prior (x0, P0)); drops
+  /// the factor (a new filter: the certificate's K3 premise needs a Λ₀ of the same filter).
   Status initialize(const Eigen::VectorXd& x0, const Eigen::MatrixXd& P0);
   /// Replaces the warm start, n x (1 + block_dim) with n a multiple of block_dim.
   Status set_solution(const Eigen::MatrixXd& X);
@@ -153,16 +154,16 @@ class StateRecovery {
   /// [μ | Σ_{*r}], n x (1 + block_dim).
   const Eigen::MatrixXd& solution() const { return solution_; }
   Eigen::VectorXd mean() const { return solution_.col(0); }
-  /// Σ_{*r}, n x block_dim.
-  Eigen::MatrixXd robot_column() const { return solution_.rightCols(block_dim_); }
-  /// Σ_rr, symmetrised.
-  Eigen::MatrixXd robot_covariance() const;
+  Eigen::MatrixXd robot_column() const { return solution_.rightCols(block_dim_); }  ///< Σ_{*r}
+  Eigen::MatrixXd robot_covariance() const;  ///< Σ_rr, symmetrised
   /// Σ_{i r} (rows of block i of the robot column), block_dim x block_dim.
   Eigen::MatrixXd cross_covariance(int block) const;
   /// E_r − Λ Σ^_{*r} of the last solve (n x d; recurrence residual without recompute): bounds.h.
   const Eigen::MatrixXd& column_residual() const { return column_residual_; }
   /// kFactor: exact marginals of the last refresh's Λ (null before the first).
   const ExactMarginals* refreshed_marginals() const { return factor_.marginals(); }
+  /// kFactor: K3 of the certificate for column_residual() (certificate.h; old_end 0 otherwise).
+  OldStateEnergy old_state_energy() const { return factor_.old_state_energy(column_residual_); }
 
  private:
   /// `iteration_cap` >= 0 lowers the fixed-iteration budget of this solve (-1: none).
@@ -183,8 +184,7 @@ class StateRecovery {
 
   int block_dim_;
   StateRecoveryOptions options_;
-  Eigen::MatrixXd solution_;
-  Eigen::MatrixXd rhs_;
+  Eigen::MatrixXd solution_, rhs_;
   BlockJacobiPreconditioner preconditioner_;
   PcgWorkspace workspace_;
   PackedBlockOperator packed_operator_;
