@@ -54,8 +54,9 @@ struct CovarianceArgs {
   double conservative_tolerance = 1e-9;
   std::string figure;  ///< Fig. 3 PNG path (empty: none)
   std::string preconditioner = "factor";
-  int refresh_interval = 10;  ///< amortised refactorisation (the library default 1 refactors
-                              ///< every step, for bit-identical checkpoints)
+  /// Refactor every step (the library's and navd's default): tight at every step; 10 was the
+  /// default before 2026-12-04 (docs/consistency.md "K3 and the floor at the time of use").
+  int refresh_interval = core::StateRecoveryOptions{}.refresh_interval;
   double refresh_residual = core::StateRecoveryOptions{}.refresh_residual;
   int iterations_after_refresh = core::StateRecoveryOptions{}.iterations_after_refresh;
   double rounding_margin = core::BoundsOptions{}.rounding_margin;
@@ -448,7 +449,7 @@ void add_covariance(CLI::App& app) {
                   "or block-jacobi")
       ->check(CLI::IsMember({"factor", "block-jacobi"}));
   cmd->add_option("--refresh-interval", args->refresh_interval,
-                  "factor: refactor after this many steps (default 10)")
+                  "factor: refactor after this many steps (default 1: every step)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--refresh-residual", args->refresh_residual,
                   "factor: refactor when the previous step's relative residual exceeded this")
