@@ -48,7 +48,10 @@ Grown grow(unsigned seed) {
   const Eigen::MatrixXd A = random_matrix(n0, n0, rng);
   Eigen::MatrixXd sigma0 = A * A.transpose() / n0 + 0.1 * Eigen::MatrixXd::Identity(n0, n0);
   for (int b = 0; b < kOldBlocks; ++b) {
-    for (int c = 0; c < kOldBlocks; ++c) sigma0.block(b * kD, c * kD, kD, kD) = S * sigma0.block(b * kD, c * kD, kD, kD) * S;
+    for (int c = 0; c < kOldBlocks; ++c) {
+      auto block = sigma0.block(b * kD, c * kD, kD, kD);
+      block = (S * block * S).eval();
+    }
   }
   g.lambda0 = sigma0.inverse();
   g.lambda0 = (0.5 * (g.lambda0 + g.lambda0.transpose())).eval();
@@ -75,7 +78,8 @@ Grown grow(unsigned seed) {
   const int rest = (nb - 1) * kD;
   const Eigen::MatrixXd schur =
       big.bottomRightCorner(rest, rest) -
-      big.bottomLeftCorner(rest, kD) * big.topLeftCorner(kD, kD).llt().solve(big.topRightCorner(kD, rest));
+      big.bottomLeftCorner(rest, kD) *
+          big.topLeftCorner(kD, kD).llt().solve(big.topRightCorner(kD, rest));
   Eigen::PermutationMatrix<Eigen::Dynamic> perm(rest);  // rest index -> current index
   for (int b = 0; b < nb - 1; ++b) {
     const int to = b == nb - 2 ? 0 : b + 1;

@@ -153,9 +153,10 @@ Status CovarianceBounds::set_recovery(const Eigen::MatrixXd& sigma_rr,
   const Eigen::MatrixXd gram = residual.transpose() * residual;
   const double spectral = std::sqrt(std::max(0.0, lambda_max_symmetric(gram)));
   Status energy_status = Status::Ok();
-  const Status s = set_recovery_with(sigma_rr, spectral, num_states, [&](const Eigen::MatrixXd& W) {
+  const auto kappa_squared = [&](const Eigen::MatrixXd& W) {
+    const Eigen::MatrixXd all = weighted_residual(residual, 0, num_states, W);
     const double k12 = std::min(certificate_lambda_ * lambda_max_scaled(gram, W),
-                                num_states * lambda_max_scaled(weighted_residual(residual, 0, num_states, W), W));
+                                num_states * lambda_max_scaled(all, W));
     const double floor = options_.rounding_margin * options_.rounding_margin;
     if (!old_states || k12 <= floor) return k12;
     const OldStateEnergy old = old_states();
@@ -175,14 +176,14 @@ Status CovarianceBounds::set_recovery(const Eigen::MatrixXd& sigma_rr,
     const double b = (1 + num_states - old.old_end) *
                      lambda_max_scaled(weighted_residual(residual, old.old_end, num_states, W), W);
     return std::min(k12, kappa_squared_split(a, b));
-  });
+  };
+  const Status s = set_recovery_with(sigma_rr, spectral, num_states, kappa_squared);
   return s.ok() ? energy_status : s;
 }
 
 Eigen::MatrixXd CovarianceBounds::weighted_residual(const Eigen::Ref<const Eigen::MatrixXd>& R,
                                                     int first, int last,
                                                     const Eigen::MatrixXd& W) const {
-  // R_0ᵀ W R_0 + Σ_{j in [max(first, 1), last)} R_jᵀ B_jj R_j: the robot and blocks [first, last).
   const int d = block_dim_;
   Eigen::MatrixXd sum = R.topRows(d).transpose() * W * R.topRows(d);
   for (int j = std::max(first, 1); j < last; ++j) {

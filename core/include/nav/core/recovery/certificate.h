@@ -14,11 +14,11 @@
 //          κ̄² <= a/ω + b/(1 − ω), minimal at ω = √a / (√a + √b): κ̄² <= (√a + √b)²,
 //        a = λmax(W^-½ R_Oᵀ Σ₀_OO R_O W^-½) (OldStateEnergy, one forward solve with Λ₀'s
 //        factor), b = |T| λmax(W^-½ Σ_{j in T} R_jᵀ B_jj R_j W^-½).
-// K1 and K2 grow with the map (L and n); K3 is within a factor (1 + √(b/a))² of exact when
-// the old states dominate the residual, which is what keeps the certified joint tight where
-// the relative-pose covariance is far smaller than the absolute one (long surveys, sphere2500:
-// docs/consistency.md "The certificate"). All three hold whatever the residual; the smallest
-// is used.
+// K1 and K2 grow with the map (L and n); K3 = a (1 + √(b/a))² grows with |T| only and is
+// close to R_Oᵀ Σ₀ R_O when the old states carry the residual. That keeps the certified joint
+// tight where the relative-pose covariance is far smaller than the absolute one (long surveys,
+// pose graphs with one gauge prior: docs/consistency.md "The certificate", "K3 and the floor
+// at the time of use"). All three hold whatever the residual; the smallest is used.
 #include <Eigen/Core>
 
 namespace nav::core {
