@@ -32,6 +32,15 @@ typedef double v8d_unaligned __attribute__((vector_size(64), aligned(8), may_ali
 #define NAV_LOAD(p) (*reinterpret_cast<const v8d_unaligned*>(p))
 #define NAV_STORE(p, v) (*reinterpret_cast<v8d_unaligned*>(p) = (v))
 
+// The tile kernels keep d accumulators of one lane group live: 4 lanes (one AVX2 register), so
+// that d = 12 needs 12 + 2 of the 16 AVX2 registers. With 8 lanes the accumulators spilled to
+// the stack on every block (d = 12: 5x slower; d = 6: 1.4x; docs/performance.md).
+typedef double v4d __attribute__((vector_size(32)));
+typedef double v4d_unaligned __attribute__((vector_size(32), aligned(8), may_alias));
+constexpr int kTileLanes = 4;
+#define NAV_TILE_LOAD(p) (*reinterpret_cast<const v4d_unaligned*>(p))
+#define NAV_TILE_STORE(p, v) (*reinterpret_cast<v4d_unaligned*>(p) = (v))
+
 /// Y_i = Σ_k A_{i,col[k]} X_{col[k]} for every block row i (tile kernel, see the header),
 /// optionally dots += Σ_rows X ∘ Y. D = 0: block size d at run time.
 template <int D>
@@ -43,24 +52,24 @@ template <int D>
   constexpr int kMax = D > 0 ? D : InformationMatrix::kMaxBlockDim;
   const std::ptrdiff_t row_stride = std::ptrdiff_t{d} * width;
   for (int i = 0; i < rows; ++i) {
-    for (int ch = 0; ch < width; ch += kLanes) {
-      v8d acc[kMax];
-      for (int r = 0; r < d; ++r) acc[r] = v8d{};
+    for (int ch = 0; ch < width; ch += kTileLanes) {
+      v4d acc[kMax];
+      for (int r = 0; r < d; ++r) acc[r] = v4d{};
       for (int k = row_start[i]; k < row_start[i + 1]; ++k) {
         const double* a = data[k];
         const double* x = X + col[k] * row_stride + ch;
         for (int q = 0; q < d; ++q) {
-          const v8d xq = NAV_LOAD(x + std::ptrdiff_t{q} * width);
+          const v4d xq = NAV_TILE_LOAD(x + std::ptrdiff_t{q} * width);
           for (int r = 0; r < d; ++r) acc[r] += a[q * d + r] * xq;
         }
       }
       double* y = Y + i * row_stride + ch;
-      for (int r = 0; r < d; ++r) NAV_STORE(y + std::ptrdiff_t{r} * width, acc[r]);
+      for (int r = 0; r < d; ++r) NAV_TILE_STORE(y + std::ptrdiff_t{r} * width, acc[r]);
       if (dots != nullptr) {
         const double* xi = X + i * row_stride + ch;
-        v8d s = NAV_LOAD(dots + ch);
-        for (int r = 0; r < d; ++r) s += NAV_LOAD(xi + std::ptrdiff_t{r} * width) * acc[r];
-        NAV_STORE(dots + ch, s);
+        v4d s = NAV_TILE_LOAD(dots + ch);
+        for (int r = 0; r < d; ++r) s += NAV_TILE_LOAD(xi + std::ptrdiff_t{r} * width) * acc[r];
+        NAV_TILE_STORE(dots + ch, s);
       }
     }
   }
@@ -91,18 +100,20 @@ template <int D>
     const double* a = inverse + std::ptrdiff_t{i} * d * d;
     const double* r_i = R + i * row_stride;
     double* z_i = Z + i * row_stride;
-    for (int ch = 0; ch < width; ch += kLanes) {
-      v8d acc[kMax];
-      for (int r = 0; r < d; ++r) acc[r] = v8d{};
+    for (int ch = 0; ch < width; ch += kTileLanes) {
+      v4d acc[kMax];
+      for (int r = 0; r < d; ++r) acc[r] = v4d{};
       for (int q = 0; q < d; ++q) {
-        const v8d rq = NAV_LOAD(r_i + std::ptrdiff_t{q} * width + ch);
+        const v4d rq = NAV_TILE_LOAD(r_i + std::ptrdiff_t{q} * width + ch);
         for (int r = 0; r < d; ++r) acc[r] += a[q * d + r] * rq;
       }
-      for (int r = 0; r < d; ++r) NAV_STORE(z_i + std::ptrdiff_t{r} * width + ch, acc[r]);
+      for (int r = 0; r < d; ++r) NAV_TILE_STORE(z_i + std::ptrdiff_t{r} * width + ch, acc[r]);
       if (dots != nullptr) {
-        v8d s = NAV_LOAD(dots + ch);
-        for (int r = 0; r < d; ++r) s += NAV_LOAD(r_i + std::ptrdiff_t{r} * width + ch) * acc[r];
-        NAV_STORE(dots + ch, s);
+        v4d s = NAV_TILE_LOAD(dots + ch);
+        for (int r = 0; r < d; ++r) {
+          s += NAV_TILE_LOAD(r_i + std::ptrdiff_t{r} * width + ch) * acc[r];
+        }
+        NAV_TILE_STORE(dots + ch, s);
       }
     }
   }
