@@ -11,9 +11,14 @@
 namespace nav::core {
 namespace {
 
-// 8 doubles: one AVX-512 register (two AVX2, four SSE2 registers in the other clones).
-typedef double v8d __attribute__((vector_size(64)));
-constexpr int kLanes = 8;
+// 4 doubles: one AVX2 register (half an AVX-512, two SSE2 registers in the other clones). GCC
+// lowers wider generic vectors on AVX2 through the stack, and a tile kernel keeps d of them
+// live: 4 lanes keep d = 12 in 12 + 2 of the 16 AVX2 registers (8 lanes were 5x slower at
+// d = 12 and 1.4x at d = 6, 10x in the Gram kernel; docs/performance.md). Packed widths stay
+// multiples of 8 (packed_width).
+typedef double v4d __attribute__((vector_size(32)));
+constexpr int kLanes = 4;
+constexpr int kWidthMultiple = 8;
 
 // On x86-64 each hot loop is compiled three times and the best one for the CPU is chosen at
 // load time (GNU ifunc). The project builds for baseline x86-64, so without this the kernels
@@ -26,20 +31,11 @@ constexpr int kLanes = 8;
 #define NAV_PACKED_KERNEL
 #endif
 
-// Unaligned, aliasing access to 8 doubles. Macros, not functions: returning a vector type by
+// Unaligned, aliasing access to 4 doubles. Macros, not functions: returning a vector type by
 // value from a function compiled for the baseline ISA would change the ABI (-Wpsabi).
-typedef double v8d_unaligned __attribute__((vector_size(64), aligned(8), may_alias));
-#define NAV_LOAD(p) (*reinterpret_cast<const v8d_unaligned*>(p))
-#define NAV_STORE(p, v) (*reinterpret_cast<v8d_unaligned*>(p) = (v))
-
-// The tile kernels keep d accumulators of one lane group live: 4 lanes (one AVX2 register), so
-// that d = 12 needs 12 + 2 of the 16 AVX2 registers. With 8 lanes the accumulators spilled to
-// the stack on every block (d = 12: 5x slower; d = 6: 1.4x; docs/performance.md).
-typedef double v4d __attribute__((vector_size(32)));
 typedef double v4d_unaligned __attribute__((vector_size(32), aligned(8), may_alias));
-constexpr int kTileLanes = 4;
-#define NAV_TILE_LOAD(p) (*reinterpret_cast<const v4d_unaligned*>(p))
-#define NAV_TILE_STORE(p, v) (*reinterpret_cast<v4d_unaligned*>(p) = (v))
+#define NAV_LOAD(p) (*reinterpret_cast<const v4d_unaligned*>(p))
+#define NAV_STORE(p, v) (*reinterpret_cast<v4d_unaligned*>(p) = (v))
 
 /// Y_i = Σ_k A_{i,col[k]} X_{col[k]} for every block row i (tile kernel, see the header),
 /// optionally dots += Σ_rows X ∘ Y. D = 0: block size d at run time.
@@ -52,24 +48,24 @@ template <int D>
   constexpr int kMax = D > 0 ? D : InformationMatrix::kMaxBlockDim;
   const std::ptrdiff_t row_stride = std::ptrdiff_t{d} * width;
   for (int i = 0; i < rows; ++i) {
-    for (int ch = 0; ch < width; ch += kTileLanes) {
+    for (int ch = 0; ch < width; ch += kLanes) {
       v4d acc[kMax];
       for (int r = 0; r < d; ++r) acc[r] = v4d{};
       for (int k = row_start[i]; k < row_start[i + 1]; ++k) {
         const double* a = data[k];
         const double* x = X + col[k] * row_stride + ch;
         for (int q = 0; q < d; ++q) {
-          const v4d xq = NAV_TILE_LOAD(x + std::ptrdiff_t{q} * width);
+          const v4d xq = NAV_LOAD(x + std::ptrdiff_t{q} * width);
           for (int r = 0; r < d; ++r) acc[r] += a[q * d + r] * xq;
         }
       }
       double* y = Y + i * row_stride + ch;
-      for (int r = 0; r < d; ++r) NAV_TILE_STORE(y + std::ptrdiff_t{r} * width, acc[r]);
+      for (int r = 0; r < d; ++r) NAV_STORE(y + std::ptrdiff_t{r} * width, acc[r]);
       if (dots != nullptr) {
         const double* xi = X + i * row_stride + ch;
-        v4d s = NAV_TILE_LOAD(dots + ch);
-        for (int r = 0; r < d; ++r) s += NAV_TILE_LOAD(xi + std::ptrdiff_t{r} * width) * acc[r];
-        NAV_TILE_STORE(dots + ch, s);
+        v4d s = NAV_LOAD(dots + ch);
+        for (int r = 0; r < d; ++r) s += NAV_LOAD(xi + std::ptrdiff_t{r} * width) * acc[r];
+        NAV_STORE(dots + ch, s);
       }
     }
   }
@@ -100,20 +96,20 @@ template <int D>
     const double* a = inverse + std::ptrdiff_t{i} * d * d;
     const double* r_i = R + i * row_stride;
     double* z_i = Z + i * row_stride;
-    for (int ch = 0; ch < width; ch += kTileLanes) {
+    for (int ch = 0; ch < width; ch += kLanes) {
       v4d acc[kMax];
       for (int r = 0; r < d; ++r) acc[r] = v4d{};
       for (int q = 0; q < d; ++q) {
-        const v4d rq = NAV_TILE_LOAD(r_i + std::ptrdiff_t{q} * width + ch);
+        const v4d rq = NAV_LOAD(r_i + std::ptrdiff_t{q} * width + ch);
         for (int r = 0; r < d; ++r) acc[r] += a[q * d + r] * rq;
       }
-      for (int r = 0; r < d; ++r) NAV_TILE_STORE(z_i + std::ptrdiff_t{r} * width + ch, acc[r]);
+      for (int r = 0; r < d; ++r) NAV_STORE(z_i + std::ptrdiff_t{r} * width + ch, acc[r]);
       if (dots != nullptr) {
-        v4d s = NAV_TILE_LOAD(dots + ch);
+        v4d s = NAV_LOAD(dots + ch);
         for (int r = 0; r < d; ++r) {
-          s += NAV_TILE_LOAD(r_i + std::ptrdiff_t{r} * width + ch) * acc[r];
+          s += NAV_LOAD(r_i + std::ptrdiff_t{r} * width + ch) * acc[r];
         }
-        NAV_TILE_STORE(dots + ch, s);
+        NAV_STORE(dots + ch, s);
       }
     }
   }
@@ -136,7 +132,7 @@ void block_diagonal_kernel(int d, const double* inverse, int rows, const double*
 NAV_PACKED_KERNEL
 void column_dots(const double* A, const double* B, std::ptrdiff_t rows, int width, double* dots) {
   for (int ch = 0; ch < width; ch += kLanes) {
-    v8d s{};
+    v4d s{};
     for (std::ptrdiff_t i = 0; i < rows; ++i) {
       s += NAV_LOAD(A + i * width + ch) * NAV_LOAD(B + i * width + ch);
     }
@@ -155,7 +151,7 @@ void gram_kernel(const double* A, std::ptrdiff_t rows, int width, double* gram) 
     const std::ptrdiff_t last = std::min(rows, first + kChunkRows);
     for (int c = 0; c < width; ++c) {
       for (int ch = 0; ch < width; ch += kLanes) {
-        v8d s = NAV_LOAD(gram + std::ptrdiff_t{c} * width + ch);
+        v4d s = NAV_LOAD(gram + std::ptrdiff_t{c} * width + ch);
         for (std::ptrdiff_t i = first; i < last; ++i) {
           s += A[i * width + c] * NAV_LOAD(A + i * width + ch);
         }
@@ -176,12 +172,12 @@ NAV_PACKED_KERNEL
 void step_x_r(double* X, double* R, const double* P, const double* Q, const double* alpha,
               std::ptrdiff_t rows, int width, double* rr) {
   for (int ch = 0; ch < width; ch += kLanes) {
-    const v8d a = NAV_LOAD(alpha + ch);
-    v8d s{};
+    const v4d a = NAV_LOAD(alpha + ch);
+    v4d s{};
     for (std::ptrdiff_t i = 0; i < rows; ++i) {
       const std::ptrdiff_t k = i * width + ch;
       NAV_STORE(X + k, NAV_LOAD(X + k) + a * NAV_LOAD(P + k));
-      const v8d r = NAV_LOAD(R + k) - a * NAV_LOAD(Q + k);
+      const v4d r = NAV_LOAD(R + k) - a * NAV_LOAD(Q + k);
       NAV_STORE(R + k, r);
       s += r * r;
     }
@@ -194,7 +190,7 @@ NAV_PACKED_KERNEL
 void update_direction(double* P, const double* Z, const double* beta, std::ptrdiff_t rows,
                       int width) {
   for (int ch = 0; ch < width; ch += kLanes) {
-    const v8d b = NAV_LOAD(beta + ch);
+    const v4d b = NAV_LOAD(beta + ch);
     for (std::ptrdiff_t i = 0; i < rows; ++i) {
       const std::ptrdiff_t k = i * width + ch;
       NAV_STORE(P + k, NAV_LOAD(Z + k) + b * NAV_LOAD(P + k));
@@ -217,7 +213,9 @@ double relative(double residual, double rhs) { return rhs > 0.0 ? residual / rhs
 
 }  // namespace
 
-int packed_width(int columns) { return (std::max(columns, 1) + kLanes - 1) / kLanes * kLanes; }
+int packed_width(int columns) {
+  return (std::max(columns, 1) + kWidthMultiple - 1) / kWidthMultiple * kWidthMultiple;
+}
 
 void pack_columns(const Eigen::Ref<const Eigen::MatrixXd>& M, int width,
                   std::vector<double>* packed) {

@@ -11,8 +11,8 @@
 // columns) is stored row-major with the row padded to `width` = m rounded up to a multiple of
 // 8 (packed_width). The d rows of a state are then one contiguous d x width tile, so the
 // product of a stored d x d block with them is a register-blocked tile kernel (GCC vector
-// extensions, 8 doubles per vector: one AVX-512 register, two AVX2 or four SSE2 registers;
-// the kernels are compiled for x86-64-v4, v3 and the baseline and picked at load time), and
+// extensions, 4 doubles per vector: one AVX2 register, two SSE2 registers; the kernels are
+// compiled for x86-64-v4, v3 and the baseline and picked at load time), and
 // every per-column dot product of PCG is a contiguous vector reduction. Padding columns are
 // zero in B and X and stay zero (their step length is 0).
 //
