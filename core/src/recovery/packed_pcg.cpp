@@ -37,6 +37,18 @@ typedef double v4d_unaligned __attribute__((vector_size(32), aligned(8), may_ali
 #define NAV_LOAD(p) (*reinterpret_cast<const v4d_unaligned*>(p))
 #define NAV_STORE(p, v) (*reinterpret_cast<v4d_unaligned*>(p) = (v))
 
+/// Asks for block row i's stored blocks (64-byte lines) while the row before is computed: the
+/// blocks are separate allocations. Only for d <= 6: a 6 x 6 block is 4.5 lines, too short
+/// for the hardware prefetcher to follow, and asking made BM_MultiplyPacked 1.3-1.6x faster;
+/// a 12 x 12 block is 18 consecutive lines, which it follows (no gain at d = 12).
+[[gnu::always_inline]] inline void prefetch_row(int d, const int* row_start,
+                                                const double* const* data, int i) {
+  constexpr int kLineDoubles = 8;
+  for (int k = row_start[i]; k < row_start[i + 1]; ++k) {
+    for (int e = 0; e < d * d; e += kLineDoubles) __builtin_prefetch(data[k] + e);
+  }
+}
+
 /// Y_i = Σ_k A_{i,col[k]} X_{col[k]} for every block row i (tile kernel, see the header),
 /// optionally dots += Σ_rows X ∘ Y. D = 0: block size d at run time.
 template <int D>
@@ -48,6 +60,7 @@ template <int D>
   constexpr int kMax = D > 0 ? D : InformationMatrix::kMaxBlockDim;
   const std::ptrdiff_t row_stride = std::ptrdiff_t{d} * width;
   for (int i = 0; i < rows; ++i) {
+    if (D > 0 && D <= 6 && i + 1 < rows) prefetch_row(d, row_start, data, i + 1);
     for (int ch = 0; ch < width; ch += kLanes) {
       v4d acc[kMax];
       for (int r = 0; r < d; ++r) acc[r] = v4d{};
