@@ -20,14 +20,12 @@
 #include <string>
 #include <vector>
 
-#include "nav/core/geometry/pose.h"
-#include "nav/core/geometry/rotation.h"
 #include "nav/core/posegraph/g2o.h"
 #include "nav/core/posegraph/replay.h"
 #include "nav/core/recovery/consistency.h"
 #include "nav/core/recovery/exact_marginals.h"
-#include "nav/core/recovery/markov_blanket.h"
 #include "nav/core/recovery/state_recovery.h"
+#include "nav/core/recovery/time_of_use.h"
 #include "navtool/commands.h"
 #include "nav/report/csv_table.h"
 #include "nav/report/figures.h"
@@ -61,77 +59,6 @@ struct CovarianceArgs {
   int iterations_after_refresh = core::StateRecoveryOptions{}.iterations_after_refresh;
   double rounding_margin = core::BoundsOptions{}.rounding_margin;
   int checks = 100;  ///< time-of-use check times spread over the run
-};
-
-/// Paper Fig. 3 at the time of use: at a check step (after the recovery, where the links of
-/// the step are proposed), for every delayed state i the relative pose x_ri = (-)x_r (+) x_i
-/// under the joint the proposal uses (bounds.h) and under the Markov blanket, against the exact
-/// joint of the current Λ (robot column by one solve with the factor, Σ_ii by selected
-/// inversion); also every stored bound and every proposal joint checked against exact.
-struct TimeOfUse {
-  int checks = 0;
-  int bounds_checked = 0, bounds_conservative = 0;
-  int joints_checked = 0, joints_conservative = 0;
-  int markov_blanket_overconfident = 0;
-  int relative_pairs_singular = 0;  ///< pairs without a Fig. 3 value (Euler singularity)
-  double worst_min_eigenvalue = 1e300;
-  std::vector<double> ours, markov_blanket;
-
-  void check(const core::PoseGraphReplay& replay, double tolerance, bool with_mb) {
-    const core::Esdf& f = replay.filter();
-    const core::CovarianceBounds& bounds = replay.bounds();
-    const int d = f.block_dim();
-    const Eigen::SparseMatrix<double> lambda = f.information().to_sparse();
-    const core::ExactMarginals exact = core::ExactMarginals::compute(lambda, d);
-    Eigen::MatrixXd E = Eigen::MatrixXd::Zero(lambda.rows(), d);
-    E.topRows(d).setIdentity();
-    Eigen::MatrixXd column(lambda.rows(), d);
-    exact.solve(E, column);
-    ++checks;
-    const core::Vec6 x_r = f.mean_block(0).head<6>();
-    auto conservative = [&](const Eigen::MatrixXd& ours_m, const Eigen::MatrixXd& exact_m) {
-      double min_eig = 0.0;
-      const bool ok = core::is_conservative(ours_m, exact_m, tolerance, &min_eig);
-      worst_min_eigenvalue = std::min(worst_min_eigenvalue, min_eig);
-      return ok;
-    };
-    ++bounds_checked;
-    bounds_conservative += conservative(bounds.robot_bound(), exact.marginal(0)) ? 1 : 0;
-    for (int i = 1; i < f.num_blocks(); ++i) {
-      const Eigen::MatrixXd sigma_ii = exact.marginal(i);
-      ++bounds_checked;
-      bounds_conservative += conservative(bounds.bound(i), sigma_ii) ? 1 : 0;
-      core::LinkProposal p;
-      if (!bounds.propose(i, replay.recovery().cross_covariance(i), &p).ok()) continue;
-      core::Mat12 joint_exact;
-      joint_exact << column.topRows(d).transpose(), column.middleRows(i * d, d).transpose(),
-          column.middleRows(i * d, d), sigma_ii;
-      joint_exact = 0.5 * (joint_exact + joint_exact.transpose()).eval();
-      ++joints_checked;
-      joints_conservative += conservative(p.joint, joint_exact) ? 1 : 0;
-      const core::Vec6 x_i = f.mean_block(i).head<6>();
-      if (at_euler_singularity(x_r, x_i)) {
-        ++relative_pairs_singular;
-        continue;
-      }
-      const core::Mat6 rel_exact = core::relative_pose_covariance(joint_exact, x_r, x_i);
-      ours.push_back(core::logdet_ratio(core::relative_pose_covariance(p.joint, x_r, x_i),
-                                        rel_exact));
-      if (!with_mb) continue;
-      const core::MarkovBlanketResult mb = core::markov_blanket_joint(f.information(), 0, i);
-      const core::Mat6 rel_mb = core::relative_pose_covariance(mb.joint, x_r, x_i);
-      markov_blanket.push_back(core::logdet_ratio(rel_mb, rel_exact));
-      if (!core::is_conservative(rel_mb, rel_exact, tolerance)) ++markov_blanket_overconfident;
-    }
-  }
-
-  /// The relative-pose covariance is first order in roll-pitch-heading, whose rate matrix is
-  /// singular at pitch +-90 deg (geometry/rotation.h): a pair with either pose or their
-  /// relative pose there has no Fig. 3 value (its bounds and joint are still checked).
-  static bool at_euler_singularity(const core::Vec6& x_r, const core::Vec6& x_i) {
-    return core::pitch_is_singular(x_r[4]) || core::pitch_is_singular(x_i[4]) ||
-           core::pitch_is_singular(core::tail_to_tail(x_r, x_i)[4]);
-  }
 };
 
 double elapsed_ms(Clock::time_point since) {
@@ -170,6 +97,8 @@ double peak_rss_mb() {
   getrusage(RUSAGE_SELF, &usage);
   return static_cast<double>(usage.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
 }
+
+json nan_as_null(double v) { return std::isnan(v) ? json(nullptr) : json(v); }
 
 json stats_json(const std::vector<double>& values) {
   if (values.empty()) return json{{"min", nullptr}, {"median", nullptr}, {"max", nullptr}};
@@ -248,7 +177,9 @@ void run_covariance(const CovarianceArgs& args) {
   std::vector<double> relative_residuals;
   int steps = 0, capped_steps = 0, refreshes = 0;
   std::vector<double> iterations;
-  TimeOfUse time_of_use;
+  core::TimeOfUseStats time_of_use;
+  const core::TimeOfUseOptions time_of_use_options{args.conservative_tolerance,
+                                                   !args.no_markov_blanket};
   const int check_every = std::max(1, (replay.num_vertices() - 1) / std::max(1, args.checks));
   while (!replay.done()) {
     const int vertex = replay.next_vertex();
@@ -272,7 +203,8 @@ void run_covariance(const CovarianceArgs& args) {
     iterations.push_back(r.iterations);
     if (args.checks > 0 && vertex % check_every == 0) {
       try {
-        time_of_use.check(replay, args.conservative_tolerance, !args.no_markov_blanket);
+        core::check_time_of_use(replay.filter(), replay.bounds(), replay.recovery(),
+                                time_of_use_options, time_of_use);
       } catch (const std::exception& e) {
         throw CommandError("covariance: time-of-use check at vertex " + std::to_string(vertex) +
                            ": " + e.what());
@@ -329,22 +261,18 @@ void run_covariance(const CovarianceArgs& args) {
   out["time_of_use_bounds_checked"] = time_of_use.bounds_checked;
   out["time_of_use_relative_pairs_singular"] = time_of_use.relative_pairs_singular;
   out["time_of_use_conservative_fraction"] =
-      time_of_use.bounds_checked > 0
-          ? static_cast<double>(time_of_use.bounds_conservative) / time_of_use.bounds_checked
-          : 0.0;
+      nan_as_null(time_of_use.bounds_conservative_fraction());
   out["time_of_use_joints_checked"] = time_of_use.joints_checked;
   out["time_of_use_joint_conservative_fraction"] =
-      time_of_use.joints_checked > 0
-          ? static_cast<double>(time_of_use.joints_conservative) / time_of_use.joints_checked
-          : 0.0;
+      nan_as_null(time_of_use.joints_conservative_fraction());
   out["time_of_use_worst_min_eigenvalue"] = time_of_use.worst_min_eigenvalue;
-  out["logdet_ratio_relative_ours"] = stats_json(time_of_use.ours);
-  out["logdet_ratio_relative_markov_blanket"] = stats_json(time_of_use.markov_blanket);
+  const std::vector<double> relative_mb = time_of_use.markov_blanket();
+  out["logdet_ratio_relative_ours"] = stats_json(time_of_use.ours());
+  out["logdet_ratio_relative_markov_blanket"] = stats_json(relative_mb);
   out["relative_markov_blanket_overconfident_fraction"] =
-      time_of_use.markov_blanket.empty()
-          ? json(nullptr)
-          : json(static_cast<double>(time_of_use.markov_blanket_overconfident) /
-                 static_cast<double>(time_of_use.markov_blanket.size()));
+      relative_mb.empty() ? json(nullptr)
+                          : json(static_cast<double>(time_of_use.markov_blanket_overconfident) /
+                                 static_cast<double>(relative_mb.size()));
   out["certified_bounds"] = options.bounds.certify_truncation;
   out["certificate_old_state_energy"] = options.bounds.old_state_energy;
   out["rounding_margin"] = options.bounds.rounding_margin;
