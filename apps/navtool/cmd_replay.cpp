@@ -34,6 +34,8 @@ struct ReplayArgs {
   std::string out_dir;
   bool json = false;
   bool vision = false;
+  int time_of_use_every = 0;
+  bool time_of_use_markov_blanket = false;
 };
 
 /// vision_answers.csv: every answer of navd's vision stage applied in the replay, in proposal
@@ -80,6 +82,8 @@ void run_replay_command(const ReplayArgs& args) {
     daemon::ReplayOptions options;
     options.speed = args.speed;
     options.as_fast_as_possible = args.as_fast_as_possible;
+    options.time_of_use_every_images = args.time_of_use_every;
+    options.time_of_use_markov_blanket = args.time_of_use_markov_blanket;
     daemon::ReplayRun run = daemon::run_replay(log.string(), config, options);
     const daemon::ReplayAnalysis analysis = daemon::analyse(*run.slam);
     daemon::ReplaySummary brief =
@@ -113,6 +117,23 @@ void run_replay_command(const ReplayArgs& args) {
   }
 }
 
+}  // namespace
+
+void add_time_of_use_options(CLI::App& cmd, int& every_images, bool& markov_blanket) {
+  cmd.add_option("--time-of-use-every", every_images,
+                 "check the bounds at the time of use at every K-th image (0: never), right "
+                 "before its link proposal: every bound and proposal joint against the exact "
+                 "marginals of that moment, and Fig. 3's relative-pose log-det ratio "
+                 "(time_of_use.csv, summary keys time_of_use_*, logdet_ratio_relative_*). "
+                 "Costs exact marginals of the whole map per check, kept off wall_s")
+      ->check(CLI::Range(0, 1000000))
+      ->capture_default_str();
+  cmd.add_flag("--time-of-use-markov-blanket", markov_blanket,
+               "the time-of-use checks include the Markov blanket's ratios (about 3x slower)");
+}
+
+namespace {
+
 void add_replay(CLI::App& app) {
   auto args = std::make_shared<ReplayArgs>();
   CLI::App* cmd = app.add_subcommand(
@@ -136,6 +157,7 @@ void add_replay(CLI::App& app) {
                 "navd's vision stage instead of reading the log's registrations (config "
                 "vision.enabled; filter.registration_wait_s raised to 8 s if not above "
                 "vision.answer_delay_s); deterministic");
+  add_time_of_use_options(*cmd, args->time_of_use_every, args->time_of_use_markov_blanket);
   cmd->callback([args] { run_replay_command(*args); });
 }
 

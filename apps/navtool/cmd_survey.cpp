@@ -17,6 +17,7 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <filesystem>
@@ -47,6 +48,8 @@ struct SurveyArgs {
   std::string out_dir;  ///< replay outputs and report; none without it
   bool checkpoints = false;
   std::string lcm_url;  ///< overrides lcm.url; no memq fallback when given
+  int time_of_use_every = -1;  ///< -1: about 100 checks over the dive (images / 100)
+  bool time_of_use_markov_blanket = false;
 };
 
 /// The report of the replay output directory `out_dir` of the dive `dive_dir`.
@@ -109,13 +112,18 @@ void run_survey(const SurveyArgs& args) {
     spdlog::info("navtool survey: stopped during the simulation; nothing replayed");
     return;
   }
+  const int time_of_use_every =
+      args.time_of_use_every >= 0 ? args.time_of_use_every : std::max(1, sim.images / 100);
   const daemon::service::ReplayModeArgs replay{.log_path = *log,
                                                .config_path = args.config_path,
                                                .speed = args.speed,
                                                .as_fast_as_possible = args.as_fast_as_possible,
                                                .out_dir = args.out_dir,
                                                .checkpoints = args.checkpoints,
-                                               .checkpoint_identity = sim_dive_identity(sim)};
+                                               .checkpoint_identity = sim_dive_identity(sim),
+                                               .time_of_use_every_images = time_of_use_every,
+                                               .time_of_use_markov_blanket =
+                                                   args.time_of_use_markov_blanket};
   spdlog::info(
       "navtool survey: live view: `navtool topside --config {}` in another terminal, then open "
       "http://127.0.0.1:8765/ (or Foxglove Studio on ws://127.0.0.1:8765); pace the replay with "
@@ -164,6 +172,7 @@ void add_survey(CLI::App& app) {
                 "write checkpoints there (period_s, at the end)");
   cmd->add_option("--lcm-url", args->lcm_url,
                   "LCM URL (overrides lcm.url; no memq:// fallback when it cannot be opened)");
+  add_time_of_use_options(*cmd, args->time_of_use_every, args->time_of_use_markov_blanket);
   cmd->callback([args] { run_survey(*args); });
 }
 

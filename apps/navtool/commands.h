@@ -39,4 +39,8 @@ struct CommandRegistration {
   }
 };
 
+/// --time-of-use-every K and --time-of-use-markov-blanket of `navtool replay` and `navtool
+/// survey` (daemon ReplayOptions::time_of_use_*; defined in cmd_replay.cpp).
+void add_time_of_use_options(CLI::App& cmd, int& every_images, bool& markov_blanket);
+
 }  // namespace nav::tool

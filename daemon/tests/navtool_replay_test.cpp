@@ -26,6 +26,10 @@ std::vector<double> numbers_of(const std::string& line) {
   return v;
 }
 
+/// Time-of-use checks at images 0, 7, ..., 35 of the 40, with the Markov blanket.
+constexpr const char* kTimeOfUse = " --time-of-use-every 7 --time-of-use-markov-blanket";
+constexpr int kTimeOfUseChecks = 6;
+
 class NavtoolReplay : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -37,7 +41,7 @@ class NavtoolReplay : public ::testing::Test {
     sim_ = new nlohmann::json(nlohmann::json::parse(sim.out));
     const NavtoolOutput replay = run_navtool("replay '" + (*root_ / "dive").string() +
                                              "' --as-fast-as-possible --json --out '" +
-                                             (*root_ / "out").string() + "'");
+                                             (*root_ / "out").string() + "'" + kTimeOfUse);
     ASSERT_EQ(replay.exit_code, 0) << replay.err;
     summary_ = new nlohmann::json(nlohmann::json::parse(replay.out));
   }
@@ -169,14 +173,47 @@ TEST_F(NavtoolReplay, ProposesOverlappingPairsWithinTheBudgetAndPublishesAnHones
   EXPECT_LT(s["published_nees_exceed_99_fraction"].get<double>(), 0.6);
 }
 
+TEST_F(NavtoolReplay, ChecksTheBoundsAtTheTimeOfUse) {
+  ASSERT_NE(summary_, nullptr);
+  const nlohmann::json& s = *summary_;
+  EXPECT_EQ(s["time_of_use_checks"], kTimeOfUseChecks);
+  EXPECT_DOUBLE_EQ(s["time_of_use_conservative_fraction"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(s["time_of_use_joint_conservative_fraction"].get<double>(), 1.0);
+  EXPECT_GT(s["time_of_use_s"].get<double>(), 0.0);
+  // Ours is conservative, the Markov blanket over-confident (paper Fig. 3).
+  EXPECT_GE(s["logdet_ratio_relative_ours_median"].get<double>(), 0.0);
+  EXPECT_LT(s["logdet_ratio_relative_markov_blanket_median"].get<double>(), 0.0);
+  // time_of_use.csv: per check, the delayed states 1..n of that moment, in order.
+  const auto rows = lines_of(read_text(*root_ / "out" / "time_of_use.csv"));
+  ASSERT_GT(rows.size(), 1u);
+  EXPECT_EQ(rows[0], "frame_id,state,ours,markov_blanket");
+  std::map<long, std::vector<long>> states_by_frame;
+  for (size_t k = 1; k < rows.size(); ++k) {
+    const auto v = numbers_of(rows[k]);
+    ASSERT_EQ(v.size(), 4u) << rows[k];
+    states_by_frame[static_cast<long>(v[0])].push_back(static_cast<long>(v[1]));
+    EXPECT_GE(v[2], -1e-6) << rows[k];
+    EXPECT_FALSE(std::isnan(v[3])) << rows[k];
+  }
+  // The first check, at image 0, has no delayed state yet.
+  EXPECT_EQ(states_by_frame.size(), static_cast<size_t>(kTimeOfUseChecks - 1));
+  size_t previous = 0;
+  for (const auto& [frame, states] : states_by_frame) {
+    for (size_t k = 0; k < states.size(); ++k) EXPECT_EQ(states[k], static_cast<long>(k + 1));
+    EXPECT_GT(states.size(), previous) << "frame " << frame;
+    previous = states.size();
+  }
+}
+
 TEST_F(NavtoolReplay, IsDeterministic) {
   ASSERT_NE(summary_, nullptr);
   const NavtoolOutput again = run_navtool("replay '" + (*root_ / "dive").string() +
                                           "' --as-fast-as-possible --out '" +
-                                          (*root_ / "again").string() + "'");
+                                          (*root_ / "again").string() + "'" + kTimeOfUse);
   ASSERT_EQ(again.exit_code, 0) << again.err;
   for (const char* file :
-       {"trajectory.csv", "states.csv", "links.csv", "logdet.csv", "proposals.csv", "published.csv"}) {
+       {"trajectory.csv", "states.csv", "links.csv", "logdet.csv", "proposals.csv", "published.csv",
+        "time_of_use.csv"}) {
     EXPECT_EQ(read_text(*root_ / "out" / file), read_text(*root_ / "again" / file)) << file;
   }
 }

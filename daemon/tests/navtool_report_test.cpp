@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
@@ -116,6 +117,16 @@ TEST(NavtoolReport, FixtureGivesExactMetricsAndFourFigures) {
   EXPECT_DOUBLE_EQ(m["logdet_ratio_ours"]["nonnegative_fraction"].get<double>(), 1.0);
   EXPECT_DOUBLE_EQ(m["logdet_ratio_markov_blanket"]["nonnegative_fraction"].get<double>(), 0.0);
   EXPECT_EQ(m["figures"].size(), 4u);
+  // time_of_use.csv: Fig. 3 at the time of use; its figure stays at the end of the dive, as one
+  // row has no Markov-blanket value.
+  EXPECT_EQ(m["time_of_use_checks"], 2);
+  EXPECT_DOUBLE_EQ(m["time_of_use_conservative_fraction"].get<double>(), 1.0);
+  EXPECT_EQ(m["logdet_ratio_relative_ours"]["count"], 9);
+  EXPECT_NEAR(m["logdet_ratio_relative_ours"]["median"].get<double>(), 0.4, 1e-12);
+  EXPECT_NEAR(m["logdet_ratio_relative_ours"]["max"].get<double>(), 0.8, 1e-12);
+  EXPECT_EQ(m["logdet_ratio_relative_markov_blanket"]["count"], 8);
+  EXPECT_DOUBLE_EQ(m["logdet_ratio_relative_markov_blanket"]["median"].get<double>(), -1.0);
+  EXPECT_EQ(m["fig3_values"], "at the end of the dive");
 
   for (const char* png : {"fig1_trajectory.png", "fig2_sparsity.png", "fig3_logdet_histogram.png",
                           "fig5_network.png"}) {
@@ -150,6 +161,22 @@ TEST(NavtoolReport, DiveDirectoryComesFromSummaryJson) {
   EXPECT_NEAR(m["slam_xy_rms_m"].get<double>(), 1.0, 1e-12);
 }
 
+TEST(NavtoolReport, Fig3ComesFromTheTimeOfUseWhenEveryCheckHasTheMarkovBlanket) {
+  const fs::path root = fresh_dir("time_of_use");
+  nav::report::test::write_dive(root / "dive");
+  nav::report::test::write_replay(root / "out");
+  {
+    std::ofstream tou(root / "out/time_of_use.csv");
+    tou << "frame_id,state,ours,markov_blanket\n10,1,0.5,-1.5\n10,2,0.25,-0.5\n";
+  }
+  const auto r = run_navtool(report_args(root / "out", root / "dive", "--json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json m = json::parse(r.out);
+  EXPECT_EQ(m["fig3_values"], "at the time of use (2 checks)");
+  EXPECT_DOUBLE_EQ(m["logdet_ratio_relative_markov_blanket"]["median"].get<double>(), -1.0);
+  EXPECT_TRUE(fs::exists(root / "out/fig3_logdet_histogram.png"));
+}
+
 TEST(NavtoolReport, WithoutDiveAndOptionalFilesMetricsAreNullAndFiguresSkipped) {
   const fs::path root = fresh_dir("minimal");
   nav::report::test::ReplayFixtureOptions o;
@@ -161,6 +188,9 @@ TEST(NavtoolReport, WithoutDiveAndOptionalFilesMetricsAreNullAndFiguresSkipped) 
   const json m = json::parse(r.out);
   EXPECT_TRUE(m["slam_xy_rms_m"].is_null());
   EXPECT_TRUE(m["nees_mean"].is_null());
+  EXPECT_TRUE(m["logdet_ratio_relative_ours"].is_null());
+  EXPECT_EQ(m["time_of_use_checks"], 0);
+  EXPECT_EQ(m["fig3_values"], "none");
   EXPECT_FALSE(m["fig5_initial_bound_present"].get<bool>());
   EXPECT_TRUE(m["figures_skipped"].contains("fig2_sparsity.png"));
   EXPECT_TRUE(m["figures_skipped"].contains("fig3_logdet_histogram.png"));

@@ -410,6 +410,7 @@ Status NavFilter::on_image(const ImageEvent& image) {
   current.relative_residual = last_relative_residual_;
   if (recovered) {
     current.robot_covariance = recovery_.robot_covariance();
+    if (before_proposal_) before_proposal_(*this);
     if (options_.propose_links && sensors_.camera()) propose_and_link(current);
   }
   relinearise_robot();

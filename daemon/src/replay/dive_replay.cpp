@@ -90,6 +90,27 @@ std::unique_ptr<vision::VisionLink> make_vision(const std::string& log_path,
   return std::make_unique<vision::VisionLink>(config, dir, vision::VisionLink::Mode::kReplay);
 }
 
+/// ReplayOptions::time_of_use_every_images: the filter's observer before each link proposal.
+void check_time_of_use_at_images(const ReplayOptions& options, ReplayRun& run) {
+  if (options.time_of_use_every_images <= 0) return;
+  run.slam->set_before_proposal([&options, &run](const NavFilter& slam) {
+    const std::size_t image = slam.images().size() - 1;
+    if (image % static_cast<std::size_t>(options.time_of_use_every_images) != 0) return;
+    if (!run.error.empty()) return;
+    const auto start = std::chrono::steady_clock::now();
+    try {
+      core::check_time_of_use(slam.esdf(), slam.bounds(), slam.recovery(),
+                              {.markov_blanket = options.time_of_use_markov_blanket},
+                              run.time_of_use);
+      run.time_of_use_frames.push_back(slam.images().back().frame_id);
+    } catch (const std::exception& e) {
+      run.error = "time-of-use check at frame " + std::to_string(slam.images().back().frame_id) +
+                  ": " + e.what();
+    }
+    run.time_of_use_s += seconds_since(start);
+  });
+}
+
 }  // namespace
 
 ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
@@ -134,6 +155,7 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
     ckpt.checkpointer =
         std::make_unique<NavFilterCheckpointer>(config.checkpoint, resumed.point, identity);
   }
+  check_time_of_use_at_images(options, run);
   TimeOrderingOptions ordering_options;
   ordering_options.latency_window_us =
       static_cast<std::int64_t>(config.filter.latency_window_ms * 1e3);
@@ -197,7 +219,8 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
     const std::string twin_error = twin->finish(ok);
     if (run.error.empty() && !twin_error.empty()) run.error = twin_error;
   }
-  run.wall_s = seconds_since(start);
+  run.wall_s = seconds_since(start) - run.time_of_use_s;
+  run.slam->set_before_proposal({});  // it refers to this frame's `run` and `options`
   if (vision) {
     run.vision = vision->stats();
     run.vision_answers = vision->applied();

@@ -1,6 +1,7 @@
 // Writers of the replay output files (output_files.h); headers from output_schema.h.
 #include "nav/daemon/replay/output_files.h"
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -146,6 +147,21 @@ void write_logdet_csv(const std::vector<LogdetRow>& rows, const std::filesystem:
   close_csv(std::move(f), path);
 }
 
+void write_time_of_use_csv(const core::TimeOfUseStats& stats,
+                           const std::vector<std::uint64_t>& frames,
+                           const std::filesystem::path& path) {
+  File f = open_csv(path, schema::TimeOfUseCsv::schema());
+  for (const core::TimeOfUsePair& p : stats.pairs) {
+    // TimeOfUseCsv: frame_id, state, ours, markov_blanket.
+    const std::uint64_t frame = frames.at(static_cast<std::size_t>(p.check - 1));
+    std::fprintf(f.get(), "%llu,%d,%.17g,", static_cast<unsigned long long>(frame), p.state,
+                 p.ours);
+    if (!std::isnan(p.markov_blanket)) std::fprintf(f.get(), "%.17g", p.markov_blanket);
+    std::fputc('\n', f.get());
+  }
+  close_csv(std::move(f), path);
+}
+
 void write_summary_json(const std::string& summary_json, const std::filesystem::path& path) {
   std::ofstream summary(path);
   if (!(summary << summary_json << "\n")) throw std::runtime_error("cannot write " + path.string());
@@ -170,6 +186,8 @@ void write_replay_outputs(const ReplayRun& run, const ReplayAnalysis& analysis,
   write_information_blocks_csv(run.slam->esdf().information(),
                                out / schema::InformationBlocksCsv::schema().file());
   write_logdet_csv(analysis.logdet, out / schema::LogdetCsv::schema().file());
+  write_time_of_use_csv(run.time_of_use, run.time_of_use_frames,
+                        out / schema::TimeOfUseCsv::schema().file());
 }
 
 }  // namespace nav::daemon

@@ -135,4 +135,10 @@ const CsvSchema& LogdetCsv::schema() {
   return schema;
 }
 
+const CsvSchema& TimeOfUseCsv::schema() {
+  static const CsvSchema schema(
+      "time_of_use.csv", {{"frame_id", ""}, {"state", ""}, {"ours", ""}, {"markov_blanket", ""}});
+  return schema;
+}
+
 }  // namespace nav::daemon::output_schema

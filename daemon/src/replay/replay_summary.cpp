@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "nav/core/recovery/consistency.h"
 #include "nav/daemon/replay/dive_replay.h"
 #include "nav/daemon/replay/output_schema.h"
 #include "nav/daemon/replay/proposal_recall.h"
@@ -123,6 +124,12 @@ std::string ReplaySummary::to_json() const {
   j["proposal_recall"] = proposal_recall;
   j["published_nees_mean"] = published_nees_mean;
   j["published_nees_exceed_99_fraction"] = published_nees_exceed_99_fraction;
+  j["time_of_use_checks"] = time_of_use_checks;
+  j["time_of_use_s"] = time_of_use_s;
+  j["time_of_use_conservative_fraction"] = time_of_use_conservative_fraction;
+  j["time_of_use_joint_conservative_fraction"] = time_of_use_joint_conservative_fraction;
+  j["logdet_ratio_relative_ours_median"] = logdet_ratio_relative_ours_median;
+  j["logdet_ratio_relative_markov_blanket_median"] = logdet_ratio_relative_markov_blanket_median;
   j["conservative_fraction"] = conservative_fraction;
   j["states_checked"] = states_checked;
   j["measurements"] = measurements;
@@ -194,6 +201,12 @@ ReplaySummary ReplaySummary::from_json(const std::string& text, const std::strin
   read(j, "proposal_recall", s.proposal_recall);
   read(j, "published_nees_mean", s.published_nees_mean);
   read(j, "published_nees_exceed_99_fraction", s.published_nees_exceed_99_fraction);
+  read(j, "time_of_use_checks", s.time_of_use_checks);
+  read(j, "time_of_use_s", s.time_of_use_s);
+  read(j, "time_of_use_conservative_fraction", s.time_of_use_conservative_fraction);
+  read(j, "time_of_use_joint_conservative_fraction", s.time_of_use_joint_conservative_fraction);
+  read(j, "logdet_ratio_relative_ours_median", s.logdet_ratio_relative_ours_median);
+  read(j, "logdet_ratio_relative_markov_blanket_median", s.logdet_ratio_relative_markov_blanket_median);
   read(j, "conservative_fraction", s.conservative_fraction);
   read(j, "states_checked", s.states_checked);
   read(j, "measurements", s.measurements);
@@ -213,6 +226,25 @@ ReplaySummary ReplaySummary::from_json(const std::string& text, const std::strin
   read(j, "error", s.error);
   return s;
 }
+
+namespace {
+
+double median_or_unset(const std::vector<double>& v) {
+  return v.empty() ? ReplaySummary::kUnset : core::summarize(v).median;
+}
+
+void add_time_of_use(const ReplayRun& run, ReplaySummary& s) {
+  const core::TimeOfUseStats& t = run.time_of_use;
+  s.time_of_use_checks = static_cast<std::uint64_t>(t.checks);
+  if (t.checks == 0) return;
+  s.time_of_use_s = run.time_of_use_s;
+  s.time_of_use_conservative_fraction = t.bounds_conservative_fraction();
+  s.time_of_use_joint_conservative_fraction = t.joints_conservative_fraction();
+  s.logdet_ratio_relative_ours_median = median_or_unset(t.ours());
+  s.logdet_ratio_relative_markov_blanket_median = median_or_unset(t.markov_blanket());
+}
+
+}  // namespace
 
 ReplaySummary make_replay_summary(const ReplayRun& run, const ReplayAnalysis& analysis,
                                   const std::string& dive_dir, const std::string& config_path) {
@@ -253,6 +285,7 @@ ReplaySummary make_replay_summary(const ReplayRun& run, const ReplayAnalysis& an
   const ProposalRecall recall = proposal_recall(*run.slam, *run.registrations);
   if (!run.slam->proposals().empty()) s.proposals_per_image_mean = recall.proposals_per_image_mean;
   s.proposal_recall = recall.recall().value_or(ReplaySummary::kUnset);
+  add_time_of_use(run, s);
   s.conservative_fraction = analysis.conservative_fraction;
   s.states_checked = analysis.states.size();
   s.measurements = c.measurements;

@@ -8,6 +8,7 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "nav/daemon/replay/output_schema.h"
@@ -220,6 +221,22 @@ std::vector<LogdetRow> read_logdet(const fs::path& file) {
   return out;
 }
 
+std::vector<TimeOfUseRow> read_time_of_use(const fs::path& file) {
+  const CsvTable t = CsvTable::read(file);
+  const schema::CsvSchema& csv = schema::TimeOfUseCsv::schema();
+  const size_t frame = column(t, csv, schema::TimeOfUseCsv::kFrameId),
+               state = column(t, csv, schema::TimeOfUseCsv::kState),
+               ours = column(t, csv, schema::TimeOfUseCsv::kOurs),
+               mb = column(t, csv, schema::TimeOfUseCsv::kMarkovBlanket);
+  std::vector<TimeOfUseRow> out(t.rows());
+  for (size_t r = 0; r < t.rows(); ++r) {
+    const double blanket =
+        t.text(r, mb).empty() ? std::numeric_limits<double>::quiet_NaN() : t.number(r, mb);
+    out[r] = {t.integer(r, frame), t.integer(r, state), t.number(r, ours), blanket};
+  }
+  return out;
+}
+
 daemon::ReplaySummary read_summary(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw ReportError(file.string() + ": cannot open");
@@ -303,6 +320,9 @@ ReplayOutput read_replay_output(const fs::path& dir) {
   }
   if (const fs::path logdet = dir / LogdetCsv::schema().file(); fs::exists(logdet)) {
     out.logdet = read_logdet(logdet);
+  }
+  if (const fs::path t = dir / schema::TimeOfUseCsv::schema().file(); fs::exists(t)) {
+    out.time_of_use = read_time_of_use(t);
   }
   return out;
 }

@@ -2,6 +2,7 @@
 #include "nav/report/report.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 
@@ -49,6 +50,46 @@ std::string trajectory_subtitle(const json& m) {
          fmt("%.3g", m["slam_final_xy_error_m"].get<double>()) + " m";
 }
 
+/// Fig. 3's ratios at the time of use (time_of_use.csv) and the checks' fractions (summary):
+/// null without checks.
+void add_time_of_use(const ReplayOutput& replay, json& m) {
+  std::vector<double> ours, mb;
+  for (const TimeOfUseRow& r : replay.time_of_use) {
+    ours.push_back(r.ours);
+    if (!std::isnan(r.markov_blanket)) mb.push_back(r.markov_blanket);
+  }
+  const daemon::ReplaySummary& s = replay.summary;
+  m["time_of_use_checks"] = s.time_of_use_checks;
+  m["time_of_use_s"] = s.time_of_use_s;
+  m["time_of_use_conservative_fraction"] = s.time_of_use_conservative_fraction;
+  m["time_of_use_joint_conservative_fraction"] = s.time_of_use_joint_conservative_fraction;
+  m["logdet_ratio_relative_ours"] = stats_json(ours);
+  m["logdet_ratio_relative_markov_blanket"] = stats_json(mb);
+}
+
+/// Fig. 3 from the time-of-use checks when every one carries the Markov blanket's ratio, else
+/// from the end of the dive (logdet.csv). Empty `ours`: neither.
+std::string fig3_values(const ReplayOutput& replay, std::vector<double>& ours,
+                        std::vector<double>& mb) {
+  const bool with_blanket =
+      !replay.time_of_use.empty() &&
+      std::none_of(replay.time_of_use.begin(), replay.time_of_use.end(),
+                   [](const TimeOfUseRow& r) { return std::isnan(r.markov_blanket); });
+  if (with_blanket) {
+    for (const TimeOfUseRow& r : replay.time_of_use) {
+      ours.push_back(r.ours);
+      mb.push_back(r.markov_blanket);
+    }
+    return "at the time of use (" + std::to_string(replay.summary.time_of_use_checks) +
+           " checks)";
+  }
+  for (const auto& r : replay.logdet) {
+    ours.push_back(r.ours);
+    mb.push_back(r.markov_blanket);
+  }
+  return "at the end of the dive";
+}
+
 void write_text(const fs::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   out << text;
@@ -78,13 +119,17 @@ json run_report(const ReportOptions& options) {
   m["inputs"] = {{"replay_dir", options.out_dir.string()},
                  {"dive_dir", dive_dir ? json(dive_dir->string()) : json(nullptr)}};
 
-  std::vector<double> ours, mb;
+  std::vector<double> end_ours, end_mb;
   for (const auto& r : replay.logdet) {
-    ours.push_back(r.ours);
-    mb.push_back(r.markov_blanket);
+    end_ours.push_back(r.ours);
+    end_mb.push_back(r.markov_blanket);
   }
-  m["logdet_ratio_ours"] = stats_json(ours);
-  m["logdet_ratio_markov_blanket"] = stats_json(mb);
+  m["logdet_ratio_ours"] = stats_json(end_ours);
+  m["logdet_ratio_markov_blanket"] = stats_json(end_mb);
+  add_time_of_use(replay, m);
+  std::vector<double> ours, mb;
+  const std::string fig3_when = fig3_values(replay, ours, mb);
+  m["fig3_values"] = ours.empty() ? "none" : fig3_when;
 
   json figures = json::array(), skipped = json::object();
   auto save = [&](const char* name, const cv::Mat& image) {
@@ -105,12 +150,13 @@ json run_report(const ReportOptions& options) {
   } else {
     skipped["fig2_sparsity.png"] = "information_blocks.csv absent";
   }
-  if (!replay.logdet.empty()) {
+  if (!ours.empty()) {
     save("fig3_logdet_histogram.png",
          logdet_histogram_figure(ours, mb, options.histogram_bins,
-                                 "Fig. 3  Relative-pose covariance: log det ratio to exact"));
+                                 "Fig. 3  Relative-pose log det ratio to exact, " +
+                                     fig3_when));
   } else {
-    skipped["fig3_logdet_histogram.png"] = "logdet.csv absent or empty";
+    skipped["fig3_logdet_histogram.png"] = "logdet.csv and time_of_use.csv absent or empty";
   }
   if (!replay.states.empty()) {
     NetworkOptions net = options.network;

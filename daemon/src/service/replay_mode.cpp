@@ -51,6 +51,8 @@ int run_replay_mode(const daemon::NavdConfig& config, const ReplayModeArgs& args
   options.stop = &stop;
   options.checkpoints = args.checkpoints;
   options.checkpoint_identity = args.checkpoint_identity;
+  options.time_of_use_every_images = args.time_of_use_every_images;
+  options.time_of_use_markov_blanket = args.time_of_use_markov_blanket;
   options.after_measurement = [&](const daemon::NavFilter& filter) {
     map_publisher.on_measurement(filter);
     const auto period = notifier.watchdog_period();

@@ -112,7 +112,8 @@ inline const char* kLinks =
 
 struct ReplayFixtureOptions {
   bool with_initial_bound = true;
-  bool with_optional_files = true;  ///< information_blocks.csv, logdet.csv, proposals.csv
+  bool with_optional_files = true;  ///< information_blocks.csv, logdet.csv, proposals.csv,
+                                    ///< time_of_use.csv
   std::string dive_dir;             ///< written to summary.json "dive_dir" when not empty
 };
 
@@ -155,6 +156,9 @@ inline void write_replay(const fs::path& dir, const ReplayFixtureOptions& o = {}
   write_file(dir / "states.csv", states);
   write_file(dir / "links.csv", kLinks);
   std::string summary = "{\"wall_s\": 2.0, \"images\": 40";
+  if (o.with_optional_files) {
+    summary += ", \"time_of_use_checks\": 2, \"time_of_use_conservative_fraction\": 1.0";
+  }
   if (!o.dive_dir.empty()) summary += ", \"dive_dir\": \"" + o.dive_dir + "\"";
   write_file(dir / "summary.json", summary + "}\n");
   if (!o.with_optional_files) return;
@@ -175,6 +179,13 @@ inline void write_replay(const fs::path& dir, const ReplayFixtureOptions& o = {}
               std::to_string(0.1 * k) + "," + std::to_string(-2.0 - 0.05 * k) + "\n";
   }
   write_file(dir / "logdet.csv", logdet);
+  // Two checks (frames 10 and 20): ours 0.0 .. 0.8 (median 0.4), blanket -1 except one unset.
+  std::string tou = "frame_id,state,ours,markov_blanket\n";
+  for (int k = 0; k < 9; ++k) {
+    tou += std::string(k < 4 ? "10," : "20,") + std::to_string(k % 4 + 1) + "," +
+           std::to_string(0.1 * k) + "," + (k == 8 ? "" : "-1") + "\n";
+  }
+  write_file(dir / "time_of_use.csv", tou);
 }
 
 }  // namespace nav::report::test

@@ -57,6 +57,14 @@ struct LogdetRow {
   double markov_blanket = 0.0;
 };
 
+/// time_of_use.csv: Fig. 3's ratios of one (check, state) pair at the time of use.
+struct TimeOfUseRow {
+  long long frame_id = 0;  ///< the image checked, before its link proposal
+  long long state = 0;
+  double ours = 0.0;
+  double markov_blanket = 0.0;  ///< NaN when not computed
+};
+
 /// information_blocks.csv: the block sparsity pattern of the final information matrix.
 struct BlockPattern {
   int block_dim = 0;
@@ -79,6 +87,7 @@ struct ReplayOutput {
   std::vector<daemon::PublishedSolution> published;  ///< published.csv (optional)
   std::optional<BlockPattern> blocks;     ///< information_blocks.csv (optional)
   std::vector<LogdetRow> logdet;          ///< logdet.csv (optional)
+  std::vector<TimeOfUseRow> time_of_use;  ///< time_of_use.csv (optional)
 };
 
 /// The simulated dive directory (all parts optional except truth.csv).
@@ -102,6 +111,7 @@ std::vector<DelayedState> read_states(const std::filesystem::path& file);
 std::vector<ProposedLink> read_links(const std::filesystem::path& file);
 BlockPattern read_block_pattern(const std::filesystem::path& file);
 std::vector<LogdetRow> read_logdet(const std::filesystem::path& file);
+std::vector<TimeOfUseRow> read_time_of_use(const std::filesystem::path& file);
 std::vector<daemon::PublishedSolution> read_published(const std::filesystem::path& file);
 daemon::ReplaySummary read_summary(const std::filesystem::path& file);
 nlohmann::json read_json(const std::filesystem::path& file);

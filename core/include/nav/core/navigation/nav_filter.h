@@ -51,6 +51,7 @@
 //   iterations: over-confident where the map is poorly converged.)
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -113,6 +114,9 @@ class NavFilter {
   /// Sequence number of the newest deferred pair (0: none yet).
   std::uint64_t last_pending_sequence() const { return pending_.last_sequence(); }
   const PendingRegistrationCounters& pending_counters() const { return pending_.counters(); }
+  /// Called at each image after its recovery, right before its link proposal (the time of use
+  /// of the bounds: recovery/time_of_use.h); images().back() is that image. Not checkpointed.
+  void set_before_proposal(std::function<void(const NavFilter&)> f) { before_proposal_ = f; }
   /// Image record of delayed-state block `block`, or nullptr (robot / unknown).
   const ImageRecord* image_of_state(int block) const;
 
@@ -189,6 +193,7 @@ class NavFilter {
   std::vector<LinkHypothesis> scratch_hypotheses_;
   NavFilterCounters counters_;
   SensorInnovationStats innovations_;
+  std::function<void(const NavFilter&)> before_proposal_;
 };
 
 }  // namespace nav::core

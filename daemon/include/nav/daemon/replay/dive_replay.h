@@ -14,6 +14,9 @@
 // fast as possible, the same log and config give the same output. The dead-reckoning twin
 // recovers synchronously (it already runs on its own thread).
 //
+// Time of use (ReplayOptions::time_of_use_every_images): at chosen images, before their link
+// proposal, the bounds and proposal joints against the exact marginals of that moment.
+//
 // After the replay, analyse() computes what the replay output files need: the final mean
 // (direct solve), exact marginals (CHOLMOD + Takahashi), bound-vs-exact checks, and the Fig. 3
 // log-det ratios (ours and Markov blanket, robot vs every delayed state).
@@ -34,6 +37,7 @@
 #include "nav/daemon/filter/registration_message.h"
 #include "nav/core/navigation/nav_filter.h"
 #include "nav/core/navigation/registration_table.h"
+#include "nav/core/recovery/time_of_use.h"
 #include "nav/daemon/sources/dive_log_source.h"
 #include "nav/daemon/queue/time_ordering.h"
 #include "nav/daemon/vision/vision_link.h"
@@ -61,6 +65,11 @@ struct ReplayOptions {
   /// default mode names the simulated dive and its options, so that a dive simulated again at
   /// the same path never resumes a checkpoint of the previous one.
   std::string checkpoint_identity;
+  /// Check the bounds at the time of use at every k-th image (1st, k+1-th, ...), right before
+  /// its link proposal (core/recovery/time_of_use.h); 0: never. A check costs exact marginals
+  /// of the whole map: its time is kept off the replay's clock (ReplayRun::time_of_use_s).
+  int time_of_use_every_images = 0;
+  bool time_of_use_markov_blanket = false;  ///< the checks include the Markov blanket's ratios
 };
 
 /// The robot's solution as navd publishes it (NAVD_SOLUTION): the mean and the current
@@ -90,6 +99,12 @@ struct ReplayRun {
   /// The SLAM filter's solution every 1/lcm.channels.nav_solution.rate_hz of data time (the
   /// first measurement at or after each period), as navd would publish it (published.csv).
   std::vector<PublishedSolution> published;
+  /// ReplayOptions::time_of_use_every_images: the checks, the frame id of each check's image
+  /// (time_of_use_frames[c - 1] for TimeOfUsePair::check c) and their wall time, which wall_s
+  /// does not include.
+  core::TimeOfUseStats time_of_use;
+  std::vector<std::uint64_t> time_of_use_frames;
+  double time_of_use_s = 0.0;
 };
 
 /// Plays `log_path` through the filters. Throws DiveLogError / ConfigError / invalid_argument

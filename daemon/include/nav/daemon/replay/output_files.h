@@ -35,6 +35,11 @@ void write_information_blocks_csv(const core::InformationMatrix& info,
                                   const std::filesystem::path& path);
 /// logdet.csv: one row per log-det ratio row.
 void write_logdet_csv(const std::vector<LogdetRow>& rows, const std::filesystem::path& path);
+/// time_of_use.csv: one row per pair of `stats`, frames[c - 1] the frame of check c (header
+/// only without checks).
+void write_time_of_use_csv(const core::TimeOfUseStats& stats,
+                           const std::vector<std::uint64_t>& frames,
+                           const std::filesystem::path& path);
 /// summary.json: `summary_json` and a newline.
 void write_summary_json(const std::string& summary_json, const std::filesystem::path& path);
 

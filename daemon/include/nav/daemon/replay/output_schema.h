@@ -147,4 +147,12 @@ struct LogdetCsv {
   static const CsvSchema& schema();
 };
 
+/// time_of_use.csv: Fig. 3's log-det ratios at the time of use (core/recovery/time_of_use.h),
+/// one row per (check, state): the frame id of the image checked (before its link proposal),
+/// the delayed state i, ours and the Markov blanket's (empty when not computed).
+struct TimeOfUseCsv {
+  enum Index : std::size_t { kFrameId, kState, kOurs, kMarkovBlanket, kCount };
+  static const CsvSchema& schema();
+};
+
 }  // namespace nav::daemon::output_schema

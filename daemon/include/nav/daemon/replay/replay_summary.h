@@ -85,6 +85,15 @@ struct ReplaySummary {
   double published_nees_mean = kUnset;
   double published_nees_exceed_99_fraction = kUnset;
 
+  // The bounds at the time of use (dive_replay.h ReplayOptions::time_of_use_every_images;
+  // unset without checks): fractions conservative against the exact marginals of the moment,
+  // and the medians of Fig. 3's relative-pose log-det ratio over every (check, state) pair.
+  std::uint64_t time_of_use_checks = 0;
+  double time_of_use_s = kUnset;  ///< wall time of the checks (not part of wall_s)
+  double time_of_use_conservative_fraction = kUnset;        ///< stored bounds
+  double time_of_use_joint_conservative_fraction = kUnset;  ///< proposal joints
+  double logdet_ratio_relative_ours_median = kUnset;
+  double logdet_ratio_relative_markov_blanket_median = kUnset;
   // Consistency of the bounds (final analysis).
   double conservative_fraction = kUnset;
   std::uint64_t states_checked = 0;

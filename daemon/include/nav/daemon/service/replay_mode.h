@@ -24,6 +24,8 @@ struct ReplayModeArgs {
   std::string out_dir;
   bool checkpoints = false;         ///< --checkpoints: resume from / write checkpoint.path
   std::string checkpoint_identity;  ///< "": the log path (ReplayOptions::checkpoint_identity)
+  int time_of_use_every_images = 0;  ///< ReplayOptions::time_of_use_every_images
+  bool time_of_use_markov_blanket = false;
 };
 
 int run_replay_mode(const daemon::NavdConfig& config, const ReplayModeArgs& args,
