@@ -128,41 +128,33 @@ void BM_RecoveryStep(benchmark::State& state, const std::string& name, StepKerne
       benchmark::Counter(refactored, benchmark::Counter::kAvgIterations);
 }
 
-/// Y = Λ X with X packed (n x 8, 7 columns used), Λ read in place (packed_pcg.h).
-void BM_MultiplyPacked(benchmark::State& state, const std::string& name) {
-  const Problem* p = problem(name);
-  if (p == nullptr) {
-    state.SkipWithError("pose graph data file absent");
-    return;
-  }
-  PackedBlockOperator op;
-  op.refresh(p->lambda);
-  std::vector<double> x, y(static_cast<size_t>(p->lambda.dim() * 8));
-  pack_columns(Eigen::MatrixXd::Random(p->lambda.dim(), 7), 8, &x);
-  for (auto _ : state) {
-    op.multiply(x.data(), y.data(), 8);
-    benchmark::DoNotOptimize(y.data());
-  }
-  set_counters(state, p->lambda.dim());
-}
-
-/// The same on the 12-dimensional lift (13 columns: μ and Σ_{*r}, packed width 16).
-void BM_MultiplyPacked12(benchmark::State& state, const std::string& name) {
-  const InformationMatrix* lambda = lifted12(name);
+/// Y = Λ X with `columns` random columns packed (packed_pcg.h), Λ read in place.
+void time_packed_multiply(benchmark::State& state, const InformationMatrix* lambda, int columns) {
   if (lambda == nullptr) {
     state.SkipWithError("pose graph data file absent");
     return;
   }
   PackedBlockOperator op;
   op.refresh(*lambda);
-  const int width = packed_width(13);
+  const int width = packed_width(columns);
   std::vector<double> x, y(static_cast<size_t>(lambda->dim() * width));
-  pack_columns(Eigen::MatrixXd::Random(lambda->dim(), 13), width, &x);
+  pack_columns(Eigen::MatrixXd::Random(lambda->dim(), columns), width, &x);
   for (auto _ : state) {
     op.multiply(x.data(), y.data(), width);
     benchmark::DoNotOptimize(y.data());
   }
   set_counters(state, lambda->dim());
+}
+
+/// The pose graph's Λ by 7 columns (packed width 8).
+void BM_MultiplyPacked(benchmark::State& state, const std::string& name) {
+  const Problem* p = problem(name);
+  time_packed_multiply(state, p != nullptr ? &p->lambda : nullptr, 7);
+}
+
+/// The same on the 12-dimensional lift (13 columns: μ and Σ_{*r}, packed width 16).
+void BM_MultiplyPacked12(benchmark::State& state, const std::string& name) {
+  time_packed_multiply(state, lifted12(name), 13);
 }
 
 void BM_Multiply(benchmark::State& state, const std::string& name, bool use_csr) {

@@ -87,6 +87,29 @@ TEST(NavFilterCore, InitialisesTracksTheRunAndKeepsOneStatePerImage) {
   EXPECT_EQ(f.innovations().sensors().size(), 3u);  // DVL, attitude, depth
 }
 
+TEST(NavFilterCore, BeforeProposalSeesEachImageAfterItsRecoveryAndBeforeItsProposals) {
+  const std::vector<Measurement> ms = straight_line(20.0);
+  NavFilter f(straight_line_options(), nullptr);
+  std::vector<std::uint64_t> seen;
+  f.set_before_proposal([&seen](const NavFilter& at) {
+    seen.push_back(at.images().back().frame_id);
+    // This image's proposals are not recorded yet; every earlier image's are.
+    EXPECT_EQ(at.proposals().size() + 1, at.images().size());
+    // The robot is the image: its delayed states are the earlier images.
+    EXPECT_EQ(static_cast<std::size_t>(at.esdf().num_blocks()), at.images().size());
+  });
+  for (const Measurement& m : ms) ASSERT_TRUE(f.process(m).ok());
+  ASSERT_EQ(seen.size(), f.images().size());
+  for (std::size_t k = 0; k < seen.size(); ++k) EXPECT_EQ(seen[k], f.images()[k].frame_id);
+  // Cleared, it is no longer called.
+  f.set_before_proposal({});
+  for (const Measurement& m : straight_line(24.0)) {
+    if (validity_us(m) <= 20'000'000) continue;
+    ASSERT_TRUE(f.process(m).ok());
+  }
+  EXPECT_GT(f.images().size(), seen.size());
+}
+
 TEST(NavFilterCore, RestoredFromItsSerialisedStateContinuesBitIdentically) {
   const std::vector<Measurement> ms = straight_line(40.0);
   const NavFilterOptions options = straight_line_options();
