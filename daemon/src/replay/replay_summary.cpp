@@ -206,7 +206,8 @@ ReplaySummary ReplaySummary::from_json(const std::string& text, const std::strin
   read(j, "time_of_use_conservative_fraction", s.time_of_use_conservative_fraction);
   read(j, "time_of_use_joint_conservative_fraction", s.time_of_use_joint_conservative_fraction);
   read(j, "logdet_ratio_relative_ours_median", s.logdet_ratio_relative_ours_median);
-  read(j, "logdet_ratio_relative_markov_blanket_median", s.logdet_ratio_relative_markov_blanket_median);
+  read(j, "logdet_ratio_relative_markov_blanket_median",
+       s.logdet_ratio_relative_markov_blanket_median);
   read(j, "conservative_fraction", s.conservative_fraction);
   read(j, "states_checked", s.states_checked);
   read(j, "measurements", s.measurements);
