@@ -247,6 +247,12 @@ ReplaySummary full_summary() {
   s.camera_gate_chi2_5dof = 20.515;
   s.registrations = 9000;
   s.registration_outliers = 438;
+  s.time_of_use_checks = 109;
+  s.time_of_use_s = awkward(2);
+  s.time_of_use_conservative_fraction = 1.0;
+  s.time_of_use_joint_conservative_fraction = 1.0;
+  s.logdet_ratio_relative_ours_median = awkward(3);
+  s.logdet_ratio_relative_markov_blanket_median = -awkward(4);
   s.conservative_fraction = 1.0;
   s.states_checked = 866;
   s.measurements = 123456;
@@ -272,6 +278,11 @@ TEST(ReplaySummary, JsonRoundTripKeepsEveryField) {
   EXPECT_EQ(r.links.outliers_rejected, 438u);
   EXPECT_EQ(r.late_dropped, 3u);
   EXPECT_EQ(r.rejected_updates, s.rejected_updates);
+  EXPECT_EQ(r.time_of_use_checks, 109u);
+  EXPECT_EQ(r.time_of_use_s, s.time_of_use_s);
+  EXPECT_EQ(r.logdet_ratio_relative_ours_median, s.logdet_ratio_relative_ours_median);
+  EXPECT_EQ(r.logdet_ratio_relative_markov_blanket_median,
+            s.logdet_ratio_relative_markov_blanket_median);
 
   // The keys scripts and tests read (README.md "navtool replay"), with their values.
   const nlohmann::json j = nlohmann::json::parse(text);
@@ -288,7 +299,7 @@ TEST(ReplaySummary, JsonRoundTripKeepsEveryField) {
     EXPECT_TRUE(j.contains(key)) << key;
   }
   EXPECT_EQ(j["rejected_updates"]["dvl"], 4);
-  EXPECT_EQ(j.size(), 44u);  // every key of today's summary.json
+  EXPECT_EQ(j.size(), 50u);  // every key of today's summary.json
 }
 
 TEST(ReplaySummary, PartialOrOddSummariesKeepDefaults) {
