@@ -34,7 +34,7 @@ core::Vec3 read_psd(const YamlReader& r) {
 FilterConfig parse_filter(const YamlReader& f) {
   f.expect_map({"process_noise_psd", "cg_iterations_per_step", "latency_window_ms",
                 "gating_chi2_threshold", "recovery_thread", "recovery_handoff_s",
-                "recovery_preconditioner", "recovery_refresh_interval",
+                "recovery_preconditioner", "recovery_refresh_interval", "recovery_refresh_residual",
                 "registration_wait_s", "max_pending_registrations", "proposal_min_probability",
                 "proposal_min_overlap", "proposal_max_per_image", "dvl_gate_sigma",
                 "roll_pitch_gate_sigma", "heading_gate_sigma", "depth_gate_sigma",
@@ -62,6 +62,7 @@ FilterConfig parse_filter(const YamlReader& f) {
     }
   }
   f.read("recovery_refresh_interval", filter.recovery_refresh_interval, 1, 100000);
+  f.read("recovery_refresh_residual", filter.recovery_refresh_residual, 1e-12, 1e12);
   f.read("registration_wait_s", filter.registration_wait_s, 0.0, 3600.0);
   f.read("max_pending_registrations", filter.max_pending_registrations, 1, 100000);
   f.read("proposal_min_probability", filter.proposal_min_probability, 1e-9, 1.0 - 1e-9);

@@ -38,6 +38,7 @@ core::NavFilterOptions filter_options_from_config(const NavdConfig& config) {
   o.recovery.iterations_per_step = config.filter.cg_iterations_per_step;
   o.recovery.preconditioner = config.filter.recovery_preconditioner;
   o.recovery.refresh_interval = config.filter.recovery_refresh_interval;
+  o.recovery.refresh_residual = config.filter.recovery_refresh_residual;
   o.camera_gate_chi2 =
       core::equivalent_chi_square_gate(config.filter.gating_chi2_threshold, 6, 5);
   o.aid_gate = config.filter.aid_gate;

@@ -24,6 +24,8 @@ struct FilterConfig {
   /// recovery_refresh_interval images, core/recovery/factor_preconditioner.h).
   core::RecoveryPreconditioner recovery_preconditioner = core::RecoveryPreconditioner::kBlockJacobi;
   int recovery_refresh_interval = 1;  ///< [1, 100000]
+  /// factor: refactor also after a solve that left a relative residual above this, [1e-12, 1e12]
+  double recovery_refresh_residual = 1e-6;
   /// Data time from an image to the measurement at which the filter takes the recovery
   /// thread's result, s, [0, 3600] (nav/core/navigation/recovery_executor.h; the next image takes
   /// it earlier: 10 s is past sim.yaml's 8 s image period, so replays overlap a whole period).
