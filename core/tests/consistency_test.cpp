@@ -68,6 +68,21 @@ TEST(Consistency, RelativePoseCovarianceMatchesNumericJacobian) {
   EXPECT_LT(relative_pose_covariance(same, x_r, x_r).cwiseAbs().maxCoeff(), 1e-12);
 }
 
+TEST(Consistency, PoseJointTakesTheFirstSixOfEachBlock) {
+  Eigen::MatrixXd joint(24, 24);
+  for (int r = 0; r < 24; ++r) {
+    for (int c = 0; c < 24; ++c) joint(r, c) = 100.0 * r + c;
+  }
+  const Mat12 p = pose_joint(joint);
+  EXPECT_EQ(p(0, 0), 0.0);
+  EXPECT_EQ(p(5, 6), 5.0 * 100.0 + 12.0);   // row 5 of r, column 0 of i
+  EXPECT_EQ(p(6, 5), 12.0 * 100.0 + 5.0);   // row 0 of i, column 5 of r
+  EXPECT_EQ(p(11, 11), 17.0 * 100.0 + 17.0);
+  EXPECT_EQ(pose_joint(Eigen::MatrixXd::Identity(12, 12)), Mat12::Identity());
+  EXPECT_THROW(pose_joint(Eigen::MatrixXd::Zero(10, 10)), std::invalid_argument);
+  EXPECT_THROW(pose_joint(Eigen::MatrixXd::Zero(24, 12)), std::invalid_argument);
+}
+
 TEST(Consistency, LogdetRatioSignAndValue) {
   const Mat6 I = Mat6::Identity();
   EXPECT_NEAR(logdet_ratio(Mat6(2.0 * I), I), 6.0 * std::log(2.0), 1e-12);

@@ -105,6 +105,20 @@ TEST(ExactMarginals, RandomSparseMatchesDenseInverse) {
   }
 }
 
+TEST(ExactMarginals, BlockColumnIsTheBlocksColumnsOfTheDenseInverse) {
+  const auto A = random_block_spd(30, 12, 25, 5u);
+  const Eigen::MatrixXd inverse = Eigen::MatrixXd(A).inverse();
+  const ExactMarginals em = ExactMarginals::compute(A, 12);
+  for (const int b : {0, 7, 29}) {
+    const Eigen::MatrixXd column = em.block_column(b);
+    ASSERT_EQ(column.rows(), A.rows());
+    ASSERT_EQ(column.cols(), 12);
+    EXPECT_LT((column - inverse.middleCols(12 * b, 12)).norm(), 1e-10 * inverse.norm())
+        << "block " << b;
+  }
+  EXPECT_THROW(em.block_column(30), std::out_of_range);
+}
+
 TEST(ExactMarginals, SolveMatchesDenseSolveForEveryKernelAndOrdering) {
   // The supernodal triangular solves (and the forward half's quadratic form) against a dense
   // LLT, on strided views (as the factor preconditioner passes them) and for 1, 13 (the

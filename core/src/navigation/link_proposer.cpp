@@ -15,14 +15,6 @@ namespace {
 
 constexpr int kD = 12;  // block dimension
 
-/// Pose rows/cols (the first 6 of each block) of the 2d x 2d joint [rr ri; ir ii].
-Mat12 pose_joint(const Eigen::MatrixXd& joint) {
-  Mat12 p;
-  p << joint.block<6, 6>(0, 0), joint.block<6, 6>(0, kD), joint.block<6, 6>(kD, 0),
-      joint.block<6, 6>(kD, kD);
-  return p;
-}
-
 LinkProposerOptions validated(const LinkProposerOptions& o) {
   if (!(o.min_probability > 0.0 && o.min_probability < 1.0) ||
       !(o.min_overlap_fraction > 0.0 && o.min_overlap_fraction <= 1.0) || o.max_per_image < 1) {

@@ -45,6 +45,19 @@ Mat6 relative_pose_covariance(const Mat12& joint, const Vec6& x_r, const Vec6& x
   return 0.5 * (cov + cov.transpose());
 }
 
+Mat12 pose_joint(const Eigen::MatrixXd& joint) {
+  const Eigen::Index d = joint.rows() / 2;
+  if (joint.rows() != joint.cols() || joint.rows() % 2 != 0 || d < 6) {
+    throw std::invalid_argument("pose_joint: the joint must be 2d x 2d with d >= 6, is " +
+                                std::to_string(joint.rows()) + "x" +
+                                std::to_string(joint.cols()));
+  }
+  Mat12 p;
+  p << joint.block<6, 6>(0, 0), joint.block<6, 6>(0, d), joint.block<6, 6>(d, 0),
+      joint.block<6, 6>(d, d);
+  return p;
+}
+
 namespace {
 double logdet_spd(const Eigen::Ref<const Eigen::MatrixXd>& m, const char* name) {
   if (m.rows() != m.cols() || m.rows() == 0) {

@@ -439,6 +439,16 @@ Eigen::MatrixXd ExactMarginals::marginal(int block) const {
   return S;
 }
 
+Eigen::MatrixXd ExactMarginals::block_column(int block) const {
+  check_block(block, num_blocks(), "ExactMarginals::block_column");
+  const int d = impl_->block_dim;
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(impl_->n, d);
+  E.middleRows(Eigen::Index{block} * d, d).setIdentity();
+  Eigen::MatrixXd X(impl_->n, d);
+  impl_->solve(E, X);
+  return X;
+}
+
 Eigen::MatrixXd ExactMarginals::joint(int a, int b) const {
   check_block(a, num_blocks(), "ExactMarginals::joint");
   check_block(b, num_blocks(), "ExactMarginals::joint");

@@ -15,14 +15,6 @@
 namespace nav::core {
 namespace {
 
-/// Rows/cols [0, 6) of r and [d, d + 6) of i from a 2d x 2d joint.
-Mat12 pose_joint(const Eigen::MatrixXd& joint, int d) {
-  Mat12 p;
-  p << joint.block(0, 0, 6, 6), joint.block(0, d, 6, 6), joint.block(d, 0, 6, 6),
-      joint.block(d, d, 6, 6);
-  return p;
-}
-
 bool at_euler_singularity(const Vec6& x_r, const Vec6& x_i) {
   return pitch_is_singular(x_r[4]) || pitch_is_singular(x_i[4]) ||
          pitch_is_singular(tail_to_tail(x_r, x_i)[4]);
@@ -40,11 +32,7 @@ struct ExactState {
 
   ExactState(const InformationMatrix& lambda, int d)
       : marginals(ExactMarginals::compute(lambda.to_sparse(), d)),
-        robot_column(lambda.dim(), d) {
-    Eigen::MatrixXd e_r = Eigen::MatrixXd::Zero(lambda.dim(), d);
-    e_r.topRows(d).setIdentity();
-    marginals.solve(e_r, robot_column);
-  }
+        robot_column(marginals.block_column(0)) {}
 
   Eigen::MatrixXd joint(int i, int d) const {
     Eigen::MatrixXd j(2 * d, 2 * d);
@@ -111,15 +99,15 @@ void check_time_of_use(const Esdf& filter, const CovarianceBounds& bounds,
       ++stats.relative_pairs_singular;
       continue;
     }
-    const Mat6 rel_exact = relative_pose_covariance(pose_joint(joint_exact, d), x_r, x_i);
+    const Mat6 rel_exact = relative_pose_covariance(pose_joint(joint_exact), x_r, x_i);
     TimeOfUsePair pair;
     pair.check = stats.checks;
     pair.state = i;
     pair.ours =
-        logdet_ratio(relative_pose_covariance(pose_joint(p.joint, d), x_r, x_i), rel_exact);
+        logdet_ratio(relative_pose_covariance(pose_joint(p.joint), x_r, x_i), rel_exact);
     if (options.markov_blanket) {
       const MarkovBlanketResult mb = markov_blanket_joint(filter.information(), 0, i);
-      const Mat6 rel_mb = relative_pose_covariance(pose_joint(mb.joint, d), x_r, x_i);
+      const Mat6 rel_mb = relative_pose_covariance(pose_joint(mb.joint), x_r, x_i);
       pair.markov_blanket = logdet_ratio(rel_mb, rel_exact);
       if (!is_conservative(rel_mb, rel_exact, options.tolerance)) {
         ++stats.markov_blanket_overconfident;

@@ -16,16 +16,6 @@ namespace {
 constexpr int kD = 12;
 constexpr double kConservativeTolerance = 1e-9;  // relative, as the report's check
 
-/// Pose rows/cols [0..5] of r and [d..d+5] of i from a 2d x 2d joint.
-core::Mat12 pose_joint(const Eigen::MatrixXd& joint) {
-  core::Mat12 p;
-  const int idx[12] = {0, 1, 2, 3, 4, 5, kD, kD + 1, kD + 2, kD + 3, kD + 4, kD + 5};
-  for (int a = 0; a < 12; ++a) {
-    for (int b = 0; b < 12; ++b) p(a, b) = joint(idx[a], idx[b]);
-  }
-  return p;
-}
-
 double logdet_or_nan(const core::Mat6& ours, const core::Mat6& exact) {
   try {
     return core::logdet_ratio(ours, exact);
@@ -34,20 +24,10 @@ double logdet_or_nan(const core::Mat6& ours, const core::Mat6& exact) {
   }
 }
 
-/// The exact robot column Σ_{*0} = Λ⁻¹ E_0 by one solve with the factor of the exact marginals
-/// (12 right-hand sides): with the marginals it gives every exact joint (0, i) without a solve
-/// per state.
-Eigen::MatrixXd exact_robot_column(const core::ExactMarginals& exact, Eigen::Index dim) {
-  const Eigen::MatrixXd e0 = Eigen::MatrixXd::Identity(dim, kD);
-  Eigen::MatrixXd column(dim, kD);
-  exact.solve(e0, column);
-  return column;
-}
-
 void logdet_rows(NavFilter& slam, const core::ExactMarginals& exact, const core::Vec12& robot,
                  const Eigen::VectorXd& mean, ReplayAnalysis& a) {
   const core::Esdf& esdf = slam.esdf();
-  const Eigen::MatrixXd column = exact_robot_column(exact, esdf.information().dim());
+  const Eigen::MatrixXd column = exact.block_column(0);  // Σ_{*r}: every exact joint (r, i)
   const Eigen::MatrixXd sigma_rr = exact.marginal(0);
   for (int i = 1; i < esdf.num_blocks(); ++i) {
     core::LinkProposal p;
@@ -60,13 +40,14 @@ void logdet_rows(NavFilter& slam, const core::ExactMarginals& exact, const core:
     Eigen::MatrixXd exact_joint(2 * kD, 2 * kD);
     const Eigen::MatrixXd sigma_ir = column.middleRows(Eigen::Index{i} * kD, kD);
     exact_joint << sigma_rr, sigma_ir.transpose(), sigma_ir, exact.marginal(i);
-    const core::Mat6 exact_rel = core::relative_pose_covariance(pose_joint(exact_joint), x_r, x_i);
-    row.ours = logdet_or_nan(core::relative_pose_covariance(pose_joint(p.joint), x_r, x_i),
+    const core::Mat6 exact_rel =
+        core::relative_pose_covariance(core::pose_joint(exact_joint), x_r, x_i);
+    row.ours = logdet_or_nan(core::relative_pose_covariance(core::pose_joint(p.joint), x_r, x_i),
                              exact_rel);
     try {
       const core::MarkovBlanketResult mb = core::markov_blanket_joint(esdf.information(), 0, i);
       row.markov_blanket = logdet_or_nan(
-          core::relative_pose_covariance(pose_joint(mb.joint), x_r, x_i), exact_rel);
+          core::relative_pose_covariance(core::pose_joint(mb.joint), x_r, x_i), exact_rel);
     } catch (const std::exception&) {
       row.markov_blanket = std::numeric_limits<double>::quiet_NaN();
     }

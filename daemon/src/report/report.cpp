@@ -50,44 +50,38 @@ std::string trajectory_subtitle(const json& m) {
          fmt("%.3g", m["slam_final_xy_error_m"].get<double>()) + " m";
 }
 
-/// Fig. 3's ratios at the time of use (time_of_use.csv) and the checks' fractions (summary):
-/// null without checks.
-void add_time_of_use(const ReplayOutput& replay, json& m) {
-  std::vector<double> ours, mb;
-  for (const TimeOfUseRow& r : replay.time_of_use) {
-    ours.push_back(r.ours);
-    if (!std::isnan(r.markov_blanket)) mb.push_back(r.markov_blanket);
+/// One set of Fig. 3 ratios: ours and the Markov blanket's (the pairs that have it).
+struct Ratios {
+  std::vector<double> ours, markov_blanket;
+  bool every_pair_has_blanket() const { return markov_blanket.size() == ours.size(); }
+};
+
+Ratios ratios_at_end(const ReplayOutput& replay) {  // logdet.csv
+  Ratios r;
+  for (const auto& row : replay.logdet) {
+    r.ours.push_back(row.ours);
+    r.markov_blanket.push_back(row.markov_blanket);
   }
-  const daemon::ReplaySummary& s = replay.summary;
+  return r;
+}
+
+Ratios ratios_at_time_of_use(const ReplayOutput& replay) {  // time_of_use.csv
+  Ratios r;
+  for (const TimeOfUseRow& row : replay.time_of_use) {
+    r.ours.push_back(row.ours);
+    if (!std::isnan(row.markov_blanket)) r.markov_blanket.push_back(row.markov_blanket);
+  }
+  return r;
+}
+
+/// The checks' counts and fractions (summary) and their ratios: null without checks.
+void add_time_of_use(const daemon::ReplaySummary& s, const Ratios& at_use, json& m) {
   m["time_of_use_checks"] = s.time_of_use_checks;
   m["time_of_use_s"] = s.time_of_use_s;
   m["time_of_use_conservative_fraction"] = s.time_of_use_conservative_fraction;
   m["time_of_use_joint_conservative_fraction"] = s.time_of_use_joint_conservative_fraction;
-  m["logdet_ratio_relative_ours"] = stats_json(ours);
-  m["logdet_ratio_relative_markov_blanket"] = stats_json(mb);
-}
-
-/// Fig. 3 from the time-of-use checks when every one carries the Markov blanket's ratio, else
-/// from the end of the dive (logdet.csv). Empty `ours`: neither.
-std::string fig3_values(const ReplayOutput& replay, std::vector<double>& ours,
-                        std::vector<double>& mb) {
-  const bool with_blanket =
-      !replay.time_of_use.empty() &&
-      std::none_of(replay.time_of_use.begin(), replay.time_of_use.end(),
-                   [](const TimeOfUseRow& r) { return std::isnan(r.markov_blanket); });
-  if (with_blanket) {
-    for (const TimeOfUseRow& r : replay.time_of_use) {
-      ours.push_back(r.ours);
-      mb.push_back(r.markov_blanket);
-    }
-    return "at the time of use (" + std::to_string(replay.summary.time_of_use_checks) +
-           " checks)";
-  }
-  for (const auto& r : replay.logdet) {
-    ours.push_back(r.ours);
-    mb.push_back(r.markov_blanket);
-  }
-  return "at the end of the dive";
+  m["logdet_ratio_relative_ours"] = stats_json(at_use.ours);
+  m["logdet_ratio_relative_markov_blanket"] = stats_json(at_use.markov_blanket);
 }
 
 void write_text(const fs::path& path, const std::string& text) {
@@ -119,17 +113,18 @@ json run_report(const ReportOptions& options) {
   m["inputs"] = {{"replay_dir", options.out_dir.string()},
                  {"dive_dir", dive_dir ? json(dive_dir->string()) : json(nullptr)}};
 
-  std::vector<double> end_ours, end_mb;
-  for (const auto& r : replay.logdet) {
-    end_ours.push_back(r.ours);
-    end_mb.push_back(r.markov_blanket);
-  }
-  m["logdet_ratio_ours"] = stats_json(end_ours);
-  m["logdet_ratio_markov_blanket"] = stats_json(end_mb);
-  add_time_of_use(replay, m);
-  std::vector<double> ours, mb;
-  const std::string fig3_when = fig3_values(replay, ours, mb);
-  m["fig3_values"] = ours.empty() ? "none" : fig3_when;
+  const Ratios at_end = ratios_at_end(replay), at_use = ratios_at_time_of_use(replay);
+  m["logdet_ratio_ours"] = stats_json(at_end.ours);
+  m["logdet_ratio_markov_blanket"] = stats_json(at_end.markov_blanket);
+  add_time_of_use(replay.summary, at_use, m);
+  // Fig. 3 at the time of use when every checked pair has the blanket's ratio, else at the end.
+  const bool fig3_at_use = !at_use.ours.empty() && at_use.every_pair_has_blanket();
+  const Ratios& fig3 = fig3_at_use ? at_use : at_end;
+  const std::string fig3_when =
+      fig3_at_use ? "at the time of use (" + std::to_string(replay.summary.time_of_use_checks) +
+                        " checks)"
+                  : "at the end of the dive";
+  m["fig3_values"] = fig3.ours.empty() ? "none" : fig3_when;
 
   json figures = json::array(), skipped = json::object();
   auto save = [&](const char* name, const cv::Mat& image) {
@@ -150,9 +145,9 @@ json run_report(const ReportOptions& options) {
   } else {
     skipped["fig2_sparsity.png"] = "information_blocks.csv absent";
   }
-  if (!ours.empty()) {
+  if (!fig3.ours.empty()) {
     save("fig3_logdet_histogram.png",
-         logdet_histogram_figure(ours, mb, options.histogram_bins,
+         logdet_histogram_figure(fig3.ours, fig3.markov_blanket, options.histogram_bins,
                                  "Fig. 3  Relative-pose log det ratio to exact, " +
                                      fig3_when));
   } else {

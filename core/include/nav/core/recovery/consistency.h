@@ -26,6 +26,11 @@ bool is_conservative(const Eigen::MatrixXd& bound, const Eigen::MatrixXd& exact,
 /// For 12-element robot states pass the pose rows/cols only (the first 6 of each).
 Mat6 relative_pose_covariance(const Mat12& joint, const Vec6& x_r, const Vec6& x_i);
 
+/// The pose rows/cols of a 2d x 2d joint of two d-element blocks [[S_rr S_ri]; [S_ir S_ii]]:
+/// [0, 6) and [d, d + 6), the input of relative_pose_covariance(). Throws
+/// std::invalid_argument unless the joint is square with an even size 2d, d >= 6.
+Mat12 pose_joint(const Eigen::MatrixXd& joint);
+
 /// log det(ours) - log det(exact) (paper Fig. 3): positive = ours is larger in volume
 /// (conservative-looking), negative = over-confident. Any square size (Mat6 for poses); both
 /// must be SPD (computed from LLT diagonals; throws std::invalid_argument otherwise or when the

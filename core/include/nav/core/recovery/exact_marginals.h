@@ -86,6 +86,10 @@ class ExactMarginals {
   /// O(nnz(L) d)), and S_ab is read from X. Either way the result is exact.
   Eigen::MatrixXd joint(int a, int b) const;
 
+  /// The d columns of block b of Lambda⁻¹ (n x d), Lambda X = E_b solved with the factor: with
+  /// marginal(i), every exact joint (b, i) without a solve per i.
+  Eigen::MatrixXd block_column(int block) const;
+
   /// X = Lambda⁻¹ B with the factor (two supernodal triangular solves, O(nnz(L) m) for an
   /// n x m B; no allocation after the first call with a given m): the preconditioner of
   /// recovery/factor_preconditioner.h. Throws ExactMarginalsError on a size mismatch (naming
