@@ -7,7 +7,12 @@
 // simplicial LDLᵀ factor of Λ over the states present, sized in advance for `kAppended` more
 // states whose rows are still the identity and are ordered last (CHOLMOD's own order of the present
 // states, then the future ones chronologically, so a new state's rows enter at the end). Each
-// benchmark iteration is one image of a survey:
+// benchmark iteration is one image of a survey, with the robot as the last block (linked to the
+// newest state by W, as the robot's odometry couples it to the state kept last):
+//   * trailing: the robot's and the previous newest state's rows and columns deleted
+//     (cholmod_rowdel) and the newest re-added without the robot's odometry, then the robot
+//     re-added linked to the new state: in the filter both change at every prediction, not
+//     only by PSD terms (marginalising the previous robot changes the newest state's block);
 //   * row-add: the new state's d rows and columns (its link couplings to the present states and
 //     its own diagonal block), one cholmod_rowadd per scalar row;
 //   * update: the link information on the older endpoints' diagonal blocks, C Cᵀ with
@@ -15,13 +20,15 @@
 //   * solve: Λ X = B for the 1 + d columns of the recovery ([η | E_r]) with the modified factor.
 // Λ uses identity link Jacobians ([W −W; −W W] per link, W a dense 6 x 6 information of the
 // scale of lawnmower_graph.h's, a prior W on state 0): the block pattern and scale of the
-// survey graph, with increments that are exact to apply. After the timed steps the factor's solve
-// is checked against Λ assembled from scratch (relative residual <= 1e-8, else the benchmark
-// errors), and a supernodal factorisation plus selected inversion of the same Λ (ExactMarginals,
-// what a refresh costs today) and its 13-column solve are timed for comparison (the second of two
+// survey graph, with increments that are exact to apply. After the timed steps the factor's
+// solve is checked against Λ assembled from scratch (relative residual <= 1e-8, else the
+// benchmark errors), and a supernodal factorisation plus selected inversion of the same Λ
+// (ExactMarginals, what a refresh costs today), its 13-column solve and a step of navd's default
+// recovery (block-Jacobi PCG, five iterations) are timed for comparison (the second of two
 // calls each).
-// Counters (per step): rowadd_ms, update_ms, solve_ms, links; refresh_factor_ms,
-// refresh_inversion_ms, supernodal_solve_ms once; nnz_L of both factors.
+// Counters (per step): trailing_ms, rowadd_ms, update_ms, solve_ms, links; refresh_factor_ms,
+// refresh_inversion_ms, supernodal_solve_ms, block_jacobi_step_ms once; nnz_L of both
+// factors.
 #include <benchmark/benchmark.h>
 #include <cholmod.h>
 
@@ -35,7 +42,9 @@
 #include <vector>
 
 #include "lawnmower_graph.h"
+#include "nav/core/filter/information_matrix.h"
 #include "nav/core/recovery/exact_marginals.h"
+#include "nav/core/recovery/state_recovery.h"
 
 namespace nav::core {
 namespace {
@@ -47,13 +56,31 @@ struct Link {
   int older = 0, newer = 0;
 };
 
-/// The lawnmower survey of about `states` poses as links between state indices, sorted by newer.
-std::vector<Link> survey_links(int states) {
+/// The lawnmower survey of about `states` poses as links between state indices, sorted by newer:
+/// lawnmower_graph.h's (odometry, and a link to the pose beside every second pose on the
+/// previous line: 1.5 links per state), or with `dense` a link from every pose to the five
+/// poses nearest beside it on the previous line (6 per state, the default survey has 7.5 camera
+/// links per image).
+std::vector<Link> survey_links(int states, bool dense) {
   const int rows = states <= 1000 ? 20 : 50;
-  const PoseGraph graph = bench::lawnmower_graph(rows, states / rows);
+  const int cols = states / rows;
   std::vector<Link> links;
-  for (const G2oEdge& e : graph.edges) {
-    links.push_back({std::min(e.from_index, e.to_index), std::max(e.from_index, e.to_index)});
+  if (!dense) {
+    const PoseGraph graph = bench::lawnmower_graph(rows, cols);
+    for (const G2oEdge& e : graph.edges) {
+      links.push_back({std::min(e.from_index, e.to_index), std::max(e.from_index, e.to_index)});
+    }
+  } else {
+    for (int k = 1; k < rows * cols; ++k) links.push_back({k - 1, k});
+    for (int r = 1; r < rows; ++r) {
+      for (int c = 0; c < cols; ++c) {
+        const int beside = cols - 1 - c;  // the previous line runs the other way
+        for (int o = std::max(0, beside - 2); o <= std::min(cols - 1, beside + 2); ++o) {
+          const int older = (r - 1) * cols + o, newer = r * cols + c;
+          if (older != newer - 1) links.push_back({older, newer});  // not the odometry again
+        }
+      }
+    }
   }
   std::sort(links.begin(), links.end(), [](const Link& a, const Link& b) {
     return a.newer != b.newer ? a.newer < b.newer : a.older < b.older;
@@ -74,30 +101,39 @@ Mat6 link_information() {
   return mix * diagonal.asDiagonal() * mix.transpose();
 }
 
-/// Λ over `n_states` blocks with the links whose newer end is below `present`; blocks from
-/// `present` on are the identity (rows not yet added). Both triangles.
-Eigen::SparseMatrix<double> assemble(const std::vector<Link>& links, int n_states, int present) {
+/// Λ over `n_states` state blocks and the robot (block n_states) with the links whose newer end
+/// is below `present`; the robot is linked to state present − 1 by W (the newest state's
+/// odometry); state blocks from `present` on are the identity (rows not yet added).
+InformationMatrix assemble(const std::vector<Link>& links, int n_states, int present) {
   const Mat6 w = link_information();
-  std::vector<Eigen::Triplet<double>> t;
-  auto add = [&](int a, int b, const Mat6& m) {
-    for (int i = 0; i < kD; ++i) {
-      for (int j = 0; j < kD; ++j) {
-        if (m(i, j) != 0.0) t.emplace_back(a * kD + i, b * kD + j, m(i, j));
-      }
-    }
+  InformationMatrix lambda(kD);
+  for (int b = 0; b <= n_states; ++b) lambda.add_block();
+  auto add_link = [&](int a, int b) {
+    lambda.add_to_block(a, a, w);
+    lambda.add_to_block(b, b, w);
+    lambda.add_to_block(a, b, -w);
   };
-  add(0, 0, w);  // the gauge: a prior on state 0
+  lambda.add_to_block(0, 0, w);  // the gauge: a prior on state 0
   for (const Link& l : links) {
     if (l.newer >= present) break;
-    add(l.older, l.older, w);
-    add(l.newer, l.newer, w);
-    add(l.older, l.newer, -w);
-    add(l.newer, l.older, -w);
+    add_link(l.older, l.newer);
   }
-  for (int s = present; s < n_states; ++s) add(s, s, Mat6::Identity());
-  Eigen::SparseMatrix<double> lambda(n_states * kD, n_states * kD);
-  lambda.setFromTriplets(t.begin(), t.end());
+  add_link(present - 1, n_states);
+  for (int s = present; s < n_states; ++s) lambda.add_to_block(s, s, Mat6::Identity());
   return lambda;
+}
+
+/// One step of navd's default recovery (block-Jacobi PCG, 5 iterations, packed kernel) on Λ,
+/// the second of two from a zero start: ms.
+double block_jacobi_step_ms(const InformationMatrix& lambda, const Eigen::VectorXd& eta) {
+  StateRecoveryOptions options;
+  options.preconditioner = RecoveryPreconditioner::kBlockJacobi;
+  StateRecovery recovery(kD, options);
+  (void)recovery.set_solution(Eigen::MatrixXd::Zero(lambda.dim(), 1 + kD));
+  (void)recovery.solve(lambda, eta);
+  const auto t0 = std::chrono::steady_clock::now();
+  (void)recovery.solve(lambda, eta);
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 /// CHOLMOD view of the lower triangle (stype -1), copied.
@@ -187,24 +223,40 @@ struct ModifiedFactor {
   bool ok() const { return c.status == CHOLMOD_OK && L != nullptr; }
 };
 
-/// Row-adds state t (its links `first` .. `last` all have newer == t).
-void row_add(ModifiedFactor& f, int t, const Link* first, const Link* last, const Mat6& w) {
-  Mat6 diagonal = Mat6::Zero();
-  for (const Link* l = first; l != last; ++l) diagonal += w;
+/// Row-adds block s (its rows are the identity): Λ_{o s} = coupling for each (o, coupling), o
+/// a block already present, and Λ_ss = diagonal; one cholmod_rowadd per scalar row.
+void add_block(ModifiedFactor& f, int s, const std::vector<std::pair<int, Mat6>>& couplings,
+               const Mat6& diagonal) {
   for (int j = 0; j < kD; ++j) {
     std::vector<Eigen::Triplet<double>> column;
-    for (const Link* l = first; l != last; ++l) {
-      for (int i = 0; i < kD; ++i) {
-        if (w(i, j) != 0.0) column.emplace_back(f.row(l->older, i), 0, -w(i, j));
-      }
+    for (const auto& [o, coupling] : couplings) {
+      for (int i = 0; i < kD; ++i) column.emplace_back(f.row(o, i), 0, coupling(i, j));
     }
-    for (int i = 0; i <= j; ++i) {
-      if (diagonal(i, j) != 0.0) column.emplace_back(f.row(t, i), 0, diagonal(i, j));
-    }
+    for (int i = 0; i <= j; ++i) column.emplace_back(f.row(s, i), 0, diagonal(i, j));
     cholmod_sparse* r = to_cholmod(std::move(column), f.L->n, 1, &f.c);
-    cholmod_rowadd(static_cast<size_t>(f.row(t, j)), r, f.L, &f.c);
+    cholmod_rowadd(static_cast<size_t>(f.row(s, j)), r, f.L, &f.c);
     cholmod_free_sparse(&r, &f.c);
   }
+}
+
+/// Sets the rows and columns of block s back to the identity (cholmod_rowdel per scalar row).
+void delete_block(ModifiedFactor& f, int s) {
+  for (int j = 0; j < kD; ++j) {
+    cholmod_rowdel(static_cast<size_t>(f.row(s, j)), nullptr, f.L, &f.c);
+  }
+}
+
+/// Row-adds state s with its links `first` .. `last` (newer == s): −W to each older end and
+/// Σ W (+ `extra` on the diagonal).
+void add_state(ModifiedFactor& f, int s, const Link* first, const Link* last, const Mat6& w,
+               const Mat6& extra) {
+  std::vector<std::pair<int, Mat6>> couplings;
+  Mat6 diagonal = extra;
+  for (const Link* l = first; l != last; ++l) {
+    couplings.emplace_back(l->older, -w);
+    diagonal += w;
+  }
+  add_block(f, s, couplings, diagonal);
 }
 
 /// Adds W to the diagonal block of each older endpoint: C = W^½ on its rows, rank d per link.
@@ -223,16 +275,27 @@ void update_older(ModifiedFactor& f, const Link* first, const Link* last, const 
   cholmod_free_sparse(&cc, &f.c);
 }
 
+/// The links whose newer end is state s, as [first, last).
+std::pair<const Link*, const Link*> links_of(const std::vector<Link>& links, int s) {
+  auto first = std::lower_bound(links.begin(), links.end(), s,
+                                [](const Link& l, int t) { return l.newer < t; });
+  auto last = first;
+  while (last != links.end() && last->newer == s) ++last;
+  const Link* base = links.data();
+  return {base + (first - links.begin()), base + (last - links.begin())};
+}
+
 void BM_FactorKeptEqual(benchmark::State& state) {
   const int states = static_cast<int>(state.range(0));
-  const std::vector<Link> links = survey_links(states);
+  const std::vector<Link> links = survey_links(states, state.range(1) != 0);
   const int n_states = links.back().newer + 1;
+  const int robot = n_states;  // the last block, ordered last
   const int present = n_states - kAppended;
   const Mat6 w = link_information();
   const Mat6 w_sqrt = Eigen::LLT<Mat6>(w).matrixL();  // W = w_sqrt w_sqrtᵀ
-  ModifiedFactor f(assemble(links, n_states, present), present * kD);
+  ModifiedFactor f(assemble(links, n_states, present).to_sparse(), present * kD);
   if (!f.ok()) state.SkipWithError("CHOLMOD could not factor the initial Λ");
-  Eigen::MatrixXd rhs = Eigen::MatrixXd::Random(n_states * kD, 1 + kD);
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Random((n_states + 1) * kD, 1 + kD);
   cholmod_dense b{};
   b.nrow = b.d = static_cast<size_t>(rhs.rows());
   b.ncol = static_cast<size_t>(rhs.cols());
@@ -240,36 +303,42 @@ void BM_FactorKeptEqual(benchmark::State& state) {
   b.x = rhs.data();
   b.xtype = CHOLMOD_REAL;
   b.dtype = CHOLMOD_DOUBLE;
-  double rowadd_ms = 0, update_ms = 0, solve_ms = 0, link_count = 0;
-  auto link = std::lower_bound(links.begin(), links.end(), present,
-                               [](const Link& l, int t) { return l.newer < t; });
+  double trailing_ms = 0, rowadd_ms = 0, update_ms = 0, solve_ms = 0, link_count = 0;
   int t = present;
   for (auto _ : state) {
     if (t >= n_states) {
       state.SkipWithError("more iterations than appended states");
       break;
     }
-    auto end = link;
-    while (end != links.end() && end->newer == t) ++end;
-    const Link* first = links.data() + (link - links.begin());
-    const Link* last = first + (end - link);
+    // The robot and the previous newest state change at every prediction: delete and re-add
+    // (the newest without the robot's odometry, which moves on to state t).
     auto t0 = std::chrono::steady_clock::now();
-    row_add(f, t, first, last, w);
+    delete_block(f, robot);
+    delete_block(f, t - 1);
+    const auto [prev_first, prev_last] = links_of(links, t - 1);
+    add_state(f, t - 1, prev_first, prev_last, w, Mat6::Zero());  // t - 1 > 0: no prior
+    trailing_ms += ms_since(t0);
+    const auto [first, last] = links_of(links, t);
+    t0 = std::chrono::steady_clock::now();
+    add_state(f, t, first, last, w, w);  // + the robot's odometry
     rowadd_ms += ms_since(t0);
     t0 = std::chrono::steady_clock::now();
     update_older(f, first, last, w_sqrt);
     update_ms += ms_since(t0);
     t0 = std::chrono::steady_clock::now();
+    add_block(f, robot, {{t, -w}}, w);
+    trailing_ms += ms_since(t0);
+    t0 = std::chrono::steady_clock::now();
     cholmod_dense* x = cholmod_solve(CHOLMOD_A, f.L, &b, &f.c);
     solve_ms += ms_since(t0);
     cholmod_free_dense(&x, &f.c);
-    link_count += static_cast<double>(end - link);
-    link = end;
+    link_count += static_cast<double>(last - first);
     ++t;
   }
   if (!f.ok()) state.SkipWithError("CHOLMOD failed while modifying the factor");
   // Independent check: the modified factor solves Λ assembled from scratch.
-  const Eigen::SparseMatrix<double> lambda = assemble(links, n_states, t);
+  const InformationMatrix blocks = assemble(links, n_states, t);
+  const Eigen::SparseMatrix<double> lambda = blocks.to_sparse();
   cholmod_dense* x = cholmod_solve(CHOLMOD_A, f.L, &b, &f.c);
   const Eigen::Map<Eigen::MatrixXd> X(static_cast<double*>(x->x), rhs.rows(), rhs.cols());
   const double residual = (rhs - lambda * X).norm() / rhs.norm();
@@ -288,11 +357,13 @@ void BM_FactorKeptEqual(benchmark::State& state) {
   refresh.solve(rhs, z);
   const double steps = static_cast<double>(state.iterations());
   state.counters["supernodal_solve_ms"] = ms_since(t0);
+  state.counters["block_jacobi_step_ms"] = block_jacobi_step_ms(blocks, rhs.col(0));
   state.counters["refresh_factor_ms"] = refresh.factor_ms();
   state.counters["refresh_inversion_ms"] = refresh.inversion_ms();
   state.counters["nnz_L_supernodal"] = static_cast<double>(refresh.factor_nnz());
   state.counters["nnz_L_modified"] = static_cast<double>(
       std::accumulate(static_cast<int*>(f.L->nz), static_cast<int*>(f.L->nz) + f.L->n, 0.0));
+  state.counters["trailing_ms"] = trailing_ms / steps;
   state.counters["rowadd_ms"] = rowadd_ms / steps;
   state.counters["update_ms"] = update_ms / steps;
   state.counters["solve_ms"] = solve_ms / steps;
@@ -301,8 +372,11 @@ void BM_FactorKeptEqual(benchmark::State& state) {
 }
 
 BENCHMARK(BM_FactorKeptEqual)
-    ->Arg(1000)
-    ->Arg(10000)
+    ->ArgNames({"states", "dense"})
+    ->Args({1000, 0})
+    ->Args({1000, 1})
+    ->Args({10000, 0})
+    ->Args({10000, 1})
     ->Iterations(kAppended)
     ->Unit(benchmark::kMillisecond);
 
