@@ -123,6 +123,10 @@ InformationMatrix assemble(const std::vector<Link>& links, int n_states, int pre
   return lambda;
 }
 
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
 /// One step of navd's default recovery (block-Jacobi PCG, 5 iterations, packed kernel) on Λ,
 /// the second of two from a zero start: ms.
 double block_jacobi_step_ms(const InformationMatrix& lambda, const Eigen::VectorXd& eta) {
@@ -133,7 +137,7 @@ double block_jacobi_step_ms(const InformationMatrix& lambda, const Eigen::Vector
   (void)recovery.solve(lambda, eta);
   const auto t0 = std::chrono::steady_clock::now();
   (void)recovery.solve(lambda, eta);
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return ms_since(t0);
 }
 
 /// CHOLMOD view of the lower triangle (stype -1), copied.
@@ -175,10 +179,6 @@ cholmod_sparse* to_cholmod(std::vector<Eigen::Triplet<double>> triplets, size_t 
   }
   std::partial_sum(p, p + cols + 1, p);
   return s;
-}
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 /// The simplicial factor being modified, with the ordering that puts future states last.
