@@ -5,7 +5,6 @@
 
 #include <arv.h>
 #include <gtest/gtest.h>
-#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -16,6 +15,7 @@
 
 #include "fake_camera_pattern.h"
 #include "nav/drivers/transports/gige_camera.h"
+#include "nav/testing/child_process.h"
 
 namespace nav::drivers {
 namespace {
@@ -110,12 +110,7 @@ class FakeGvProcess {
       ::_exit(127);
     }
   }
-  ~FakeGvProcess() {
-    if (pid_ > 0) {
-      ::kill(pid_, SIGTERM);
-      ::waitpid(pid_, nullptr, 0);
-    }
-  }
+  ~FakeGvProcess() { (void)nav::testing::terminate_child(pid_); }
   bool started() const { return pid_ > 0; }
   bool exited() {
     if (pid_ <= 0 || ::waitpid(pid_, nullptr, WNOHANG) != pid_) return false;

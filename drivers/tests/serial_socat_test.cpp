@@ -7,7 +7,6 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <poll.h>
-#include <signal.h>
 #include <sys/wait.h>
 #include <termios.h>
 #include <unistd.h>
@@ -18,6 +17,7 @@
 #include <vector>
 
 #include "nav/drivers/transports/serial_port.h"
+#include "nav/testing/child_process.h"
 
 namespace nav::drivers {
 namespace {
@@ -51,11 +51,14 @@ class SocatNullModem {
     }
     return false;
   }
+  /// Stops socat (SIGKILL if it ignores SIGTERM) and removes the links it would have removed.
   void stop() {
     if (pid_ <= 0) return;
-    ::kill(pid_, SIGTERM);
-    ::waitpid(pid_, nullptr, 0);
+    (void)nav::testing::terminate_child(pid_);
     pid_ = -1;
+    std::error_code ignored;
+    fs::remove(port_link_, ignored);
+    fs::remove(sensor_link_, ignored);
   }
 
  private:
