@@ -62,7 +62,7 @@ struct Link {
 /// poses nearest beside it on the previous line (6 per state, the default survey has 7.5 camera
 /// links per image).
 std::vector<Link> survey_links(int states, bool dense) {
-  const int rows = states <= 1000 ? 20 : 50;
+  const int rows = states <= 1000 ? 20 : states <= 10000 ? 50 : 200;  // as preconditioner_bench
   const int cols = states / rows;
   std::vector<Link> links;
   if (!dense) {
@@ -377,6 +377,7 @@ BENCHMARK(BM_FactorKeptEqual)
     ->Args({1000, 1})
     ->Args({10000, 0})
     ->Args({10000, 1})
+    ->Args({100000, 0})
     ->Iterations(kAppended)
     ->Unit(benchmark::kMillisecond);
 
