@@ -5,8 +5,10 @@
 // Method (Davis & Hager, "Modifying a sparse Cholesky factorization", SIMAX 1999; "Row
 // modifications of a sparse Cholesky factorization", SIMAX 2005; CHOLMOD's Modify module): a
 // simplicial LDLᵀ factor of Λ over the states present, sized in advance for `kAppended` more
-// states whose rows are still the identity and are ordered last (CHOLMOD's own order of the present
-// states, then the future ones chronologically, so a new state's rows enter at the end). Each
+// states whose rows are still the identity and are ordered last (CHOLMOD's own order of the
+// present states, then the future ones chronologically, so a new state's rows enter at the
+// end). Arguments: the number of states and the link graph (survey_links: 1.5 or 6 links per
+// state). Each
 // benchmark iteration is one image of a survey, with the robot as the last block (linked to the
 // newest state by W, as the robot's odometry couples it to the state kept last):
 //   * trailing: the robot's and the previous newest state's rows and columns deleted
