@@ -16,6 +16,8 @@
 #include <thread>
 #include <vector>
 
+#include "nav/testing/child_process.h"
+
 namespace nav::tool::test {
 
 /// Starts argv[0] (a path) with stdout and stderr to the given files.
@@ -41,20 +43,16 @@ inline int wait_child(pid_t pid, std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   do {
     int status = 0;
-    if (::waitpid(pid, &status, WNOHANG) == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    if (::waitpid(pid, &status, WNOHANG) == pid)
+      return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   } while (std::chrono::steady_clock::now() < deadline);
   return -1;
 }
 
-/// SIGTERM, then SIGKILL after 3 s; reaps the child.
+/// SIGTERM, then SIGKILL after 3 s; reaps the child (nav/testing/child_process.h).
 inline void stop_child(pid_t pid) {
-  if (pid <= 0) return;
-  ::kill(pid, SIGTERM);
-  if (wait_child(pid, std::chrono::seconds(3)) == -1) {
-    ::kill(pid, SIGKILL);
-    ::waitpid(pid, nullptr, 0);
-  }
+  (void)nav::testing::terminate_child(pid, std::chrono::seconds(3));
 }
 
 inline std::string file_text(const std::filesystem::path& path) {
@@ -69,8 +67,8 @@ inline std::string file_text(const std::filesystem::path& path) {
 /// `extra`: more arguments (e.g. --config).
 inline pid_t start_topside(const std::string& lcm_url, int port, const std::filesystem::path& dir,
                            const std::vector<std::string>& extra = {}) {
-  std::vector<std::string> argv = {NAVTOOL_PATH, "topside", "--lcm-url", lcm_url, "--listen",
-                                   "127.0.0.1:" + std::to_string(port)};
+  std::vector<std::string> argv = {NAVTOOL_PATH, "topside",  "--lcm-url",
+                                   lcm_url,      "--listen", "127.0.0.1:" + std::to_string(port)};
   argv.insert(argv.end(), extra.begin(), extra.end());
   const pid_t pid = spawn_process(argv, dir / "topside.stdout", dir / "topside.stderr");
   for (int i = 0; i < 500; ++i) {
