@@ -9,7 +9,10 @@
 // as the recovery thread does. BM_RecoveryToTolerance/<preconditioner>/<states>:
 //   * block_jacobi: blkdiag(Λ_ii), packed kernel (the navd default);
 //   * factor: a CHOLMOD factor of Λ refreshed every 10 solves (refresh_interval 10, and when a
-//     step ends above 1e-6), so the mean time includes a tenth of a refresh.
+//     step ends above 1e-6), so the mean time includes a tenth of a refresh;
+//   * kept_factor: the same refresh of the exact marginals every 10 solves, and a factor kept
+//     equal to Λ by row modifications and rank updates as the preconditioner
+//     (kept_equal_factor.h), so that one iteration is the direct solve.
 // BM_FactorRefresh/<states>: one refresh alone (supernodal Cholesky plus the selected inversion
 // that gives the exact marginals). Counters: iterations and refreshes per step, hit_cap (the
 // fraction of steps stopped by the cap), dim. Results: docs/consistency.md.
@@ -58,7 +61,8 @@ void add_link(InformationMatrix& lambda, int k) {
   lambda.add_to_block(newest, newest, w);
 }
 
-void BM_RecoveryToTolerance(benchmark::State& state, RecoveryPreconditioner preconditioner) {
+void BM_RecoveryToTolerance(benchmark::State& state, RecoveryPreconditioner preconditioner,
+                            bool keep_factor_equal) {
   const Survey& s = survey(static_cast<int>(state.range(0)));
   InformationMatrix lambda = s.lambda;
   StateRecoveryOptions options;
@@ -67,6 +71,7 @@ void BM_RecoveryToTolerance(benchmark::State& state, RecoveryPreconditioner prec
   options.max_iterations = 3000;
   options.preconditioner = preconditioner;
   options.refresh_interval = 10;
+  options.keep_factor_equal = keep_factor_equal;
   StateRecovery recovery(6, options);
   (void)recovery.set_solution(Eigen::MatrixXd::Zero(lambda.dim(), 7));
   (void)recovery.solve(lambda, s.eta);  // cold start (and the first factor), untimed
@@ -100,12 +105,18 @@ void BM_FactorRefresh(benchmark::State& state) {
   state.counters["dim"] = static_cast<double>(lambda.rows());
 }
 
-BENCHMARK_CAPTURE(BM_RecoveryToTolerance, block_jacobi, RecoveryPreconditioner::kBlockJacobi)
+BENCHMARK_CAPTURE(BM_RecoveryToTolerance, block_jacobi, RecoveryPreconditioner::kBlockJacobi,
+                  false)
     ->Arg(1000)
     ->Arg(10000)
     ->Arg(100000)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_RecoveryToTolerance, factor, RecoveryPreconditioner::kFactor)
+BENCHMARK_CAPTURE(BM_RecoveryToTolerance, factor, RecoveryPreconditioner::kFactor, false)
+    ->Arg(1000)
+    ->Arg(10000)
+    ->Arg(100000)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RecoveryToTolerance, kept_factor, RecoveryPreconditioner::kFactor, true)
     ->Arg(1000)
     ->Arg(10000)
     ->Arg(100000)

@@ -17,6 +17,7 @@
 
 #include "nav/core/recovery/exact_marginals.h"
 
+#include "cholmod_view.h"
 #include "exact_marginals_impl.h"
 #include "selinv_kernel.h"
 
@@ -72,25 +73,6 @@ cholmod_sparse* lower_to_cholmod(const Eigen::SparseMatrix<double>& Lambda, chol
     }
   }
   Ap[n] = k;
-  return A;
-}
-
-/// A CHOLMOD header over the lower triangle stored in C (no copy; C must outlive it). C's row
-/// indices within a column need not be sorted (Eigen's symmetric permutation leaves them in
-/// scatter order), which CHOLMOD's analysis and supernodal factorisation accept.
-cholmod_sparse lower_view(Eigen::SparseMatrix<double>& C) {
-  cholmod_sparse A{};
-  A.nrow = A.ncol = static_cast<size_t>(C.rows());
-  A.nzmax = static_cast<size_t>(C.nonZeros());
-  A.p = C.outerIndexPtr();
-  A.i = C.innerIndexPtr();
-  A.x = C.valuePtr();
-  A.stype = -1;
-  A.itype = CHOLMOD_INT;
-  A.xtype = CHOLMOD_REAL;
-  A.dtype = CHOLMOD_DOUBLE;
-  A.sorted = 0;
-  A.packed = 1;
   return A;
 }
 
@@ -237,7 +219,7 @@ void ExactMarginals::Impl::factor_permuted(const Eigen::SparseMatrix<double>& La
   Eigen::SparseMatrix<double> C(n, n);
   C.selfadjointView<Eigen::Lower>() = Lambda.selfadjointView<Eigen::Lower>().twistedBy(P);
   C.makeCompressed();
-  cholmod_sparse view = lower_view(C);
+  cholmod_sparse view = detail::lower_view(C, /*sorted=*/false);
   common.nmethods = 1;
   common.method[0].ordering = CHOLMOD_NATURAL;
   common.postorder = 0;

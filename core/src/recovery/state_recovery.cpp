@@ -65,6 +65,11 @@ Status StateRecoveryOptions::validate() const {
                          "StateRecoveryOptions.iterations_after_refresh must be >= 1, got " +
                              std::to_string(iterations_after_refresh));
   }
+  if (kept_factor_spare_blocks < 1) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "StateRecoveryOptions.kept_factor_spare_blocks must be >= 1, got " +
+                             std::to_string(kept_factor_spare_blocks));
+  }
   if (max_iterations < 1) {
     return Status::Error(StatusCode::kInvalidArgument,
                          "StateRecoveryOptions.max_iterations must be >= 1, got " +
@@ -100,6 +105,7 @@ Status StateRecovery::initialize(const Eigen::VectorXd& x0, const Eigen::MatrixX
   solution_.col(0) = x0;
   solution_.rightCols(block_dim_) = 0.5 * (P0 + P0.transpose());
   factor_.reset();
+  kept_.reset();
   solves_since_refresh_ = 0;
   last_column_residual_ = 0.0;
   return Status::Ok();
@@ -260,29 +266,43 @@ RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Preconditio
   return result;
 }
 
+Status StateRecovery::update_kept(const InformationMatrix& lambda, bool refactor) {
+  const int spare = options_.kept_factor_spare_blocks;
+  if (refactor || !kept_.has_factor()) return kept_.factor(lambda, spare);
+  const Status s = kept_.update(lambda);
+  // Out of reserved slots, or a CHOLMOD failure on a modification: refactor this Λ.
+  return s.ok() ? s : kept_.factor(lambda, spare);
+}
+
 RecoveryResult StateRecovery::solve_factor(const InformationMatrix& lambda,
                                            const Eigen::VectorXd& eta) {
   RecoveryResult result;
   result.mode = options_.mode;
+  const bool kept = options_.keep_factor_equal;
+  const bool missed = !(last_column_residual_ <= options_.refresh_residual);
   const bool refresh = !factor_.has_factor() || factor_.factored_dim() > lambda.dim() ||
-                       solves_since_refresh_ >= options_.refresh_interval ||
-                       !(last_column_residual_ <= options_.refresh_residual);
+                       solves_since_refresh_ >= options_.refresh_interval || (missed && !kept);
   if (refresh) {
     result.status = factor_.refresh(lambda.to_sparse(), block_dim_);
     if (!result.status.ok()) return result;
     solves_since_refresh_ = 0;
   }
-  result.status = factor_.update_trailing(lambda);
+  result.status = kept ? update_kept(lambda, missed)
+                       : factor_.update_trailing(lambda);
   if (!result.status.ok()) return result;
-  const int cap = refresh ? options_.iterations_after_refresh : -1;
+  const Preconditioner& M = kept ? static_cast<const Preconditioner&>(kept_) : factor_;
+  const int cap = refresh || kept ? options_.iterations_after_refresh : -1;
   if (options_.kernel == RecoveryKernel::kPacked) {
     packed_operator_.refresh(lambda);
-    result = solve_with(PackedSpdOperator(packed_operator_, packed_rhs_, packed_solution_),
-                        factor_, eta, cap);
+    result = solve_with(PackedSpdOperator(packed_operator_, packed_rhs_, packed_solution_), M,
+                        eta, cap);
   } else {
-    result = solve_with(InformationOperator(lambda), factor_, eta, cap);
+    result = solve_with(InformationOperator(lambda), M, eta, cap);
   }
-  result.refactored_blocks = static_cast<int>((lambda.dim() - factor_.factored_dim()) / block_dim_);
+  const KeptFactorUpdate& u = kept_.last_update();
+  result.refactored_blocks =
+      kept ? u.rows_replaced + u.rows_added + u.blocks_updated
+           : static_cast<int>((lambda.dim() - factor_.factored_dim()) / block_dim_);
   result.refreshed = refresh;
   ++solves_since_refresh_;
   last_column_residual_ = result.column_relative_residual;

@@ -24,7 +24,8 @@
 // and a direct CHOLMOD solve (reference). Reaching the cap is NOT an error (block-Jacobi PCG
 // stagnates on badly conditioned Λ): the result carries hit_iteration_cap and the residual,
 // from which the certified bounds (bounds.h) stay conservative (only looser). Preconditioners:
-// block Jacobi, or a Cholesky factor of Λ refreshed every few steps (factor_preconditioner.h).
+// block Jacobi, or a Cholesky factor of Λ refreshed every few steps (factor_preconditioner.h)
+// or kept equal to Λ by modifications at every step (kept_equal_factor.h).
 //
 // Not thread-safe: owned by the recovery thread. No clocks (time it from the caller).
 
@@ -33,90 +34,13 @@
 
 #include "nav/core/filter/information_matrix.h"
 #include "nav/core/recovery/factor_preconditioner.h"
+#include "nav/core/recovery/kept_equal_factor.h"
 #include "nav/core/recovery/packed_pcg.h"
 #include "nav/core/recovery/pcg.h"
+#include "nav/core/recovery/recovery_options.h"
 #include "nav/core/status.h"
 
 namespace nav::core {
-
-enum class RecoveryMode {
-  kFixedIterations,  ///< exactly `iterations_per_step` PCG iterations (real-time mode)
-  kTolerance,        ///< PCG until every column meets `relative_tolerance` or max_iterations
-                     ///< is reached (ok either way; RecoveryResult::hit_iteration_cap)
-  kDirect,           ///< CHOLMOD supernodal Cholesky of the snapshot (reference; O(fill))
-};
-
-const char* to_string(RecoveryMode mode);
-
-/// How the PCG modes multiply with Λ when solving on the filter's block matrix.
-enum class RecoveryKernel {
-  /// packed_pcg.h: Λ read in place through a block view, packed right-hand sides, SIMD tile
-  /// kernels, preconditioner blocks re-inverted only when they changed (block_dim 6 and 12
-  /// are specialised, other sizes use a generic tile loop).
-  kPacked,
-  /// pcg.h: InformationMatrix::multiply on column-major blocks, every preconditioner block
-  /// re-inverted each solve (the original implementation; kept as the benchmark baseline).
-  kGeneric,
-};
-
-const char* to_string(RecoveryKernel kernel);
-
-/// Preconditioner of the PCG modes on the filter's block matrix (CSR snapshots: block Jacobi).
-enum class RecoveryPreconditioner {
-  kBlockJacobi,  ///< blkdiag(Λ_ii) (with `kernel`)
-  kFactor,       ///< Cholesky of Λ at a refresh + a dense block over the robot and newer
-                 ///< states (factor_preconditioner.h); Λ products by `kernel`; refresh below
-};
-
-const char* to_string(RecoveryPreconditioner preconditioner);
-
-struct StateRecoveryOptions {
-  RecoveryMode mode = RecoveryMode::kFixedIterations;
-  /// kFixedIterations: PCG iterations per step, >= 0 (0 = only re-evaluate the warm start).
-  int iterations_per_step = 5;
-  /// kTolerance: stop when ‖b_c - Λ x_c‖ <= relative_tolerance ‖b_c‖ for every column, > 0.
-  double relative_tolerance = 1e-10;
-  /// kTolerance: iteration cap per solve, >= 1; hitting it is not an error (hit_iteration_cap,
-  /// the residual reached: the bounds certify from it).
-  int max_iterations = 5000;
-  /// Solver of the PCG modes on an InformationMatrix (CSR snapshots always use pcg.h).
-  RecoveryKernel kernel = RecoveryKernel::kPacked;
-  /// PCG modes: recompute the true residual B - Λ X at the end (one more Λ product). false
-  /// reports the recurrence residual: only for a caller that certifies elsewhere (NavFilter's
-  /// recovery thread: the filter takes the true residual on its current Λ).
-  bool recompute_true_residual = true;
-  RecoveryPreconditioner preconditioner = RecoveryPreconditioner::kFactor;
-  /// kFactor: refactor before a solve when `refresh_interval` solves (>= 1) used the factor, or
-  /// when the previous solve left a covariance-column relative residual above
-  /// `refresh_residual` (> 0). 1: every solve refactors, so a solve depends only on Λ, η and
-  /// the warm start (a checkpointed or copied recovery continues bit-identically; a copy
-  /// carries no factor and refactors at its first solve).
-  int refresh_interval = 1;
-  double refresh_residual = 1e-6;
-  /// kFactor, kFixedIterations: at most this many iterations (>= 1) in a step that refactored:
-  /// M = Λ, the first is the direct solve; later ones drift on rounding noise where the
-  /// computed residual cannot see it (docs/consistency.md "Iterations after a refresh").
-  int iterations_after_refresh = 1;
-  Status validate() const;
-};
-
-struct RecoveryResult {
-  Status status;
-  RecoveryMode mode = RecoveryMode::kFixedIterations;
-  int iterations = 0;                    ///< PCG iterations (0 for kDirect)
-  /// kTolerance only: the cap (max_iterations) stopped PCG before every column met the
-  /// tolerance. status stays ok; the residuals below say what was reached.
-  bool hit_iteration_cap = false;
-  double mean_relative_residual = 0.0;   ///< ‖η - Λμ‖ / ‖η‖
-  double column_relative_residual = 0.0; ///< max_c ‖e_c - Λσ_c‖ / ‖e_c‖ over the Σ_{*r} columns
-  double max_relative_residual = 0.0;    ///< max of the two above
-  double column_residual_frobenius = 0.0;  ///< ‖E_r - Λ Σ̂_{*r}‖_F (certificate, bounds.h)
-  /// ‖E_r - Λ Σ̂_{*r}‖₂ (<= the Frobenius norm), every mode: the certificate's tighter input.
-  double column_residual_spectral = 0.0;
-  int refactored_blocks = 0;  ///< preconditioner blocks re-inverted (packed: changed only)
-  /// kFactor: this solve refactored Λ (StateRecovery::refreshed_marginals() are of this Λ).
-  bool refreshed = false;
-};
 
 class StateRecovery {
  public:
@@ -170,6 +94,8 @@ class StateRecovery {
   RecoveryResult solve_with(const SpdOperator& A, const Preconditioner& M,
                             const Eigen::VectorXd& eta, int iteration_cap = -1);
   RecoveryResult solve_factor(const InformationMatrix& lambda, const Eigen::VectorXd& eta);
+  /// kFactor with keep_factor_equal: brings kept_ to Λ (refactoring when it must).
+  Status update_kept(const InformationMatrix& lambda, bool refactor);
   RecoveryResult solve_packed(const InformationMatrix& lambda, const Eigen::VectorXd& eta);
   PcgOptions pcg_options() const;
   void note_convergence(RecoveryResult& result, const PcgSummary& summary) const;
@@ -193,6 +119,7 @@ class StateRecovery {
   std::vector<double> packed_rhs_, packed_solution_;
   Eigen::MatrixXd column_residual_;
   FactorPreconditioner factor_;
+  KeptEqualFactor kept_;
   int solves_since_refresh_ = 0;
   double last_column_residual_ = 0.0;
 };

@@ -1,0 +1,107 @@
+#pragma once
+// A sparse LDLᵀ factor of the filter's Λ kept equal to Λ from one recovery step to the next by
+// modifying it instead of refactoring: the factor preconditioner's kept-equal mode
+// (factor_preconditioner.h). With M = Λ one PCG iteration is the direct solve.
+//
+// Method: Davis & Hager, "Modifying a sparse Cholesky factorization" (SIMAX 20(3), 1999) and
+// "Row modifications of a sparse Cholesky factorization" (SIMAX 26(3), 2005), as CHOLMOD's
+// Modify module implements them on a simplicial LDLᵀ factor (cholmod_updown, cholmod_rowadd,
+// cholmod_rowdel). The factor lives in "slot" space: the delayed states present at the last
+// refactorisation in AMD order of the block graph, then `spare_blocks` reserved slots whose
+// rows are the identity until a state appended later takes them (chronologically, so a new
+// state's rows enter at the end and cause no fill above them), then the robot (block 0) last.
+//
+// What changes between two steps of the delayed-state filter (filter/esdf.h), and how each
+// change reaches the factor in update():
+//   * the robot (block 0) and its neighbours in the previously factored Λ: prediction
+//     marginalises the robot (a Schur complement on its neighbours, not a PSD increment) and a
+//     kept robot becomes an appended block. Their rows are deleted and re-added whole;
+//   * appended blocks: row-added into the next reserved slots;
+//   * any other block whose diagonal block changed (the older endpoint of a camera link): the
+//     increment ΔΛ over those blocks, PSD under the ESDF's fixed linearisation (a sum of link
+//     terms Hᵀ R⁻¹ H), is split per connected group by an eigendecomposition into
+//     ΔΛ = C₊C₊ᵀ − C₋C₋ᵀ and applied by a rank update (and a downdate, empty under the premise).
+// A change that breaks the premise without touching a diagonal block (a relabelling of states
+// that are not the robot's neighbours) is not seen: the factor then differs from Λ, PCG with it
+// is still exact in exact arithmetic (M stays SPD), and the recovery's residual test triggers a
+// refresh. The certified bounds never depend on the factor being equal to Λ (bounds.h).
+//
+// Costs per step (docs/performance.md "A factor kept equal to Λ"): row modifications of the
+// robot, its neighbours and the appended states, a rank update of about 5 per link, one
+// simplicial solve; the O(map) part is the scan of the diagonal blocks.
+//
+// Not thread-safe (CHOLMOD's workspace): owned by the recovery thread.
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "nav/core/filter/information_matrix.h"
+#include "nav/core/recovery/pcg.h"
+#include "nav/core/status.h"
+
+namespace nav::core {
+
+/// What the last update() did (for the recovery's diagnostics and the tests).
+struct KeptFactorUpdate {
+  int rows_replaced = 0;  ///< blocks deleted and re-added (the robot and its neighbours)
+  int rows_added = 0;     ///< appended blocks row-added into reserved slots
+  int blocks_updated = 0; ///< other blocks whose increment was applied by a rank update
+  int update_rank = 0;    ///< columns of C₊ (rank update)
+  int downdate_rank = 0;  ///< columns of C₋ (downdate; 0 under the PSD premise)
+};
+
+class KeptEqualFactor final : public Preconditioner {
+ public:
+  KeptEqualFactor();
+  ~KeptEqualFactor() override;
+  /// A copy (or a move) carries no factor: it refactors at its first use, as a checkpointed or
+  /// copied recovery does (factor_preconditioner.h).
+  KeptEqualFactor(const KeptEqualFactor&);
+  KeptEqualFactor& operator=(const KeptEqualFactor& other);
+
+  /// Factors Λ afresh (block 0 the robot, blocks 1.. the delayed states) with room for
+  /// `spare_blocks` (>= 0) appended states. kNotPositiveDefinite (no factor kept) when CHOLMOD
+  /// meets a non-positive pivot, kInvalidArgument for an empty Λ or a negative spare count.
+  Status factor(const InformationMatrix& lambda, int spare_blocks);
+  /// Modifies the factor to equal `lambda`: the same filter's Λ some steps later, its blocks
+  /// 1 .. factored_blocks()-1 the same states, the blocks after them appended since (file
+  /// comment). kOutOfRange when more blocks were appended than reserved slots remain and
+  /// kInvalidArgument for another block size or fewer blocks (the factor is kept: refactor);
+  /// kNotPositiveDefinite when CHOLMOD fails (the factor is dropped).
+  Status update(const InformationMatrix& lambda);
+  /// Drops the factor.
+  void reset();
+
+  bool has_factor() const;
+  /// Blocks of the Λ the factor equals now.
+  int factored_blocks() const { return factored_.num_blocks(); }
+  /// Reserved slots not taken yet.
+  int spare_blocks() const;
+  const KeptFactorUpdate& last_update() const { return last_update_; }
+  /// Nonzeros of L (fill), for the benchmarks.
+  double factor_nnz() const;
+
+  Eigen::Index dim() const override { return factored_.dim(); }
+  /// Z = Λ⁻¹ R with the factor (R and Z of dim() rows).
+  void apply(const Eigen::Ref<const Eigen::MatrixXd>& R,
+             Eigen::Ref<Eigen::MatrixXd> Z) const override;
+
+ private:
+  struct Cholmod;
+  int slot_row(int block, int i) const;
+  void delete_block(int block);
+  void add_block(const InformationMatrix& lambda, int block);
+  bool rank_update(const InformationMatrix& lambda, const std::vector<int>& changed);
+  void copy_rows(const InformationMatrix& lambda, const std::vector<int>& rows);
+
+  std::unique_ptr<Cholmod> factor_;
+  InformationMatrix factored_{1};  // Λ as the factor holds it
+  std::vector<int> slot_;          // slot_[block]: the block's slot in the factor
+  std::vector<char> present_;      // present_[block]: its rows are in the factor now
+  int next_slot_ = 0, robot_slot_ = 0;
+  KeptFactorUpdate last_update_;
+  mutable Eigen::MatrixXd scatter_;
+};
+
+}  // namespace nav::core
