@@ -145,9 +145,10 @@ core::ReplayOptions replay_options(const CovarianceArgs& a) {
   }
   o.recovery.kernel =
       a.kernel == "generic" ? core::RecoveryKernel::kGeneric : core::RecoveryKernel::kPacked;
-  o.recovery.preconditioner = a.preconditioner == "factor"
-                                  ? core::RecoveryPreconditioner::kFactor
-                                  : core::RecoveryPreconditioner::kBlockJacobi;
+  o.recovery.preconditioner = a.preconditioner == "block-jacobi"
+                                  ? core::RecoveryPreconditioner::kBlockJacobi
+                                  : core::RecoveryPreconditioner::kFactor;
+  o.recovery.keep_factor_equal = a.preconditioner == "kept-factor";
   o.recovery.refresh_interval = a.refresh_interval;
   o.recovery.refresh_residual = a.refresh_residual;
   o.recovery.iterations_after_refresh = a.iterations_after_refresh;
@@ -253,6 +254,7 @@ void run_covariance(const CovarianceArgs& args) {
       tolerance_mode ? json(options.recovery.max_iterations) : json(nullptr);
   out["capped_steps"] = capped_steps;
   out["preconditioner"] = core::to_string(options.recovery.preconditioner);
+  out["kept_factor"] = options.recovery.keep_factor_equal;
   out["refreshes"] = refreshes;
   out["iterations_after_refresh"] = options.recovery.iterations_after_refresh;
   out["iterations_median"] = percentile(iterations, 0.5);
@@ -373,9 +375,10 @@ void add_covariance(CLI::App& app) {
                   "generic (the original, for comparison)")
       ->check(CLI::IsMember({"packed", "generic"}));
   cmd->add_option("--preconditioner", args->preconditioner,
-                  "PCG preconditioner: factor (Cholesky of Λ refreshed every few steps, default) "
-                  "or block-jacobi")
-      ->check(CLI::IsMember({"factor", "block-jacobi"}));
+                  "PCG preconditioner: factor (Cholesky of Λ refreshed every few steps, default), "
+                  "kept-factor (a factor kept equal to Λ by row modifications and rank updates; "
+                  "the refresh renews only the exact marginals) or block-jacobi")
+      ->check(CLI::IsMember({"factor", "kept-factor", "block-jacobi"}));
   cmd->add_option("--refresh-interval", args->refresh_interval,
                   "factor: refactor after this many steps (default 1: every step)")
       ->check(CLI::PositiveNumber);

@@ -126,6 +126,21 @@ TEST(Config, RegistrationKeys) {
   EXPECT_EQ(e.key_path(), "filter.max_pending_registrations");
 }
 
+TEST(Config, RecoveryPreconditionerNames) {
+  EXPECT_EQ(parse_config(kMinimal).filter.recovery_preconditioner,
+            core::RecoveryPreconditioner::kBlockJacobi);
+  NavdConfig c = parse_config(std::string(kMinimal) + "filter: {recovery_preconditioner: factor}\n");
+  EXPECT_EQ(c.filter.recovery_preconditioner, core::RecoveryPreconditioner::kFactor);
+  EXPECT_FALSE(c.filter.recovery_keep_factor_equal);
+  c = parse_config(std::string(kMinimal) + "filter: {recovery_preconditioner: kept_factor}\n");
+  EXPECT_EQ(c.filter.recovery_preconditioner, core::RecoveryPreconditioner::kFactor);
+  EXPECT_TRUE(c.filter.recovery_keep_factor_equal);
+  const ConfigError e =
+      expect_error(std::string(kMinimal) + "filter: {recovery_preconditioner: cholesky}\n");
+  EXPECT_EQ(e.key_path(), "filter.recovery_preconditioner");
+  EXPECT_NE(e.reason().find("block_jacobi, factor or kept_factor"), std::string::npos) << e.what();
+}
+
 TEST(Config, RegistrationSigningKeys) {
   NavdConfig c = parse_config(kMinimal);
   EXPECT_TRUE(c.lcm.registration_signing.key_file.empty());  // off by default

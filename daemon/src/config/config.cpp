@@ -55,10 +55,12 @@ FilterConfig parse_filter(const YamlReader& f) {
   f.read("recovery_handoff_s", filter.recovery_handoff_s, 0.0, 3600.0);
   if (f.has("recovery_preconditioner")) {
     const std::string name = f.at("recovery_preconditioner").as_string();
-    if (name == "factor") {
+    if (name == "factor" || name == "kept_factor") {
       filter.recovery_preconditioner = core::RecoveryPreconditioner::kFactor;
+      filter.recovery_keep_factor_equal = name == "kept_factor";
     } else if (name != "block_jacobi") {
-      f.at("recovery_preconditioner").fail("'" + name + "' must be block_jacobi or factor");
+      f.at("recovery_preconditioner")
+          .fail("'" + name + "' must be block_jacobi, factor or kept_factor");
     }
   }
   f.read("recovery_refresh_interval", filter.recovery_refresh_interval, 1, 100000);

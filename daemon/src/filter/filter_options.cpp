@@ -37,6 +37,7 @@ core::NavFilterOptions filter_options_from_config(const NavdConfig& config) {
   o.recovery.mode = core::RecoveryMode::kFixedIterations;
   o.recovery.iterations_per_step = config.filter.cg_iterations_per_step;
   o.recovery.preconditioner = config.filter.recovery_preconditioner;
+  o.recovery.keep_factor_equal = config.filter.recovery_keep_factor_equal;
   o.recovery.refresh_interval = config.filter.recovery_refresh_interval;
   o.recovery.refresh_residual = config.filter.recovery_refresh_residual;
   o.camera_gate_chi2 =

@@ -20,9 +20,12 @@ struct FilterConfig {
   /// PCG iterations on the recovery thread (true) or synchronously at each image (false, the
   /// default: the thread made the default dive's replay ~15 % slower, README "Recovery thread").
   bool recovery_thread = false;
-  /// The PCG preconditioner (block_jacobi | factor: a Cholesky factor of Λ refactored every
+  /// The PCG preconditioner (block_jacobi | factor | kept_factor: a Cholesky factor of Λ refactored every
   /// recovery_refresh_interval images, core/recovery/factor_preconditioner.h).
   core::RecoveryPreconditioner recovery_preconditioner = core::RecoveryPreconditioner::kBlockJacobi;
+  /// kept_factor: the factor is kept equal to Λ by row modifications and rank updates at every
+  /// image and the refresh only renews the exact marginals (core/recovery/kept_equal_factor.h).
+  bool recovery_keep_factor_equal = false;
   int recovery_refresh_interval = 1;  ///< [1, 100000]
   /// factor: refactor also after a solve that left a relative residual above this, [1e-12, 1e12]
   double recovery_refresh_residual = 1e-6;
