@@ -251,6 +251,7 @@ ReplaySummary full_summary() {
   s.time_of_use_s = awkward(2);
   s.time_of_use_conservative_fraction = 1.0;
   s.time_of_use_joint_conservative_fraction = 1.0;
+  s.time_of_use_worst_min_eigenvalue = -awkward(6);
   s.logdet_ratio_relative_ours_median = awkward(3);
   s.logdet_ratio_relative_markov_blanket_median = -awkward(4);
   s.conservative_fraction = 1.0;
@@ -280,6 +281,7 @@ TEST(ReplaySummary, JsonRoundTripKeepsEveryField) {
   EXPECT_EQ(r.rejected_updates, s.rejected_updates);
   EXPECT_EQ(r.time_of_use_checks, 109u);
   EXPECT_EQ(r.time_of_use_s, s.time_of_use_s);
+  EXPECT_EQ(r.time_of_use_worst_min_eigenvalue, s.time_of_use_worst_min_eigenvalue);
   EXPECT_EQ(r.logdet_ratio_relative_ours_median, s.logdet_ratio_relative_ours_median);
   EXPECT_EQ(r.logdet_ratio_relative_markov_blanket_median,
             s.logdet_ratio_relative_markov_blanket_median);
@@ -299,7 +301,7 @@ TEST(ReplaySummary, JsonRoundTripKeepsEveryField) {
     EXPECT_TRUE(j.contains(key)) << key;
   }
   EXPECT_EQ(j["rejected_updates"]["dvl"], 4);
-  EXPECT_EQ(j.size(), 50u);  // every key of today's summary.json
+  EXPECT_EQ(j.size(), 51u);  // every key of today's summary.json
 }
 
 TEST(ReplaySummary, PartialOrOddSummariesKeepDefaults) {

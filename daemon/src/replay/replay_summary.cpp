@@ -128,6 +128,7 @@ std::string ReplaySummary::to_json() const {
   j["time_of_use_s"] = time_of_use_s;
   j["time_of_use_conservative_fraction"] = time_of_use_conservative_fraction;
   j["time_of_use_joint_conservative_fraction"] = time_of_use_joint_conservative_fraction;
+  j["time_of_use_worst_min_eigenvalue"] = time_of_use_worst_min_eigenvalue;
   j["logdet_ratio_relative_ours_median"] = logdet_ratio_relative_ours_median;
   j["logdet_ratio_relative_markov_blanket_median"] = logdet_ratio_relative_markov_blanket_median;
   j["conservative_fraction"] = conservative_fraction;
@@ -205,6 +206,7 @@ ReplaySummary ReplaySummary::from_json(const std::string& text, const std::strin
   read(j, "time_of_use_s", s.time_of_use_s);
   read(j, "time_of_use_conservative_fraction", s.time_of_use_conservative_fraction);
   read(j, "time_of_use_joint_conservative_fraction", s.time_of_use_joint_conservative_fraction);
+  read(j, "time_of_use_worst_min_eigenvalue", s.time_of_use_worst_min_eigenvalue);
   read(j, "logdet_ratio_relative_ours_median", s.logdet_ratio_relative_ours_median);
   read(j, "logdet_ratio_relative_markov_blanket_median",
        s.logdet_ratio_relative_markov_blanket_median);
@@ -241,6 +243,7 @@ void add_time_of_use(const ReplayRun& run, ReplaySummary& s) {
   s.time_of_use_s = run.time_of_use_s;
   s.time_of_use_conservative_fraction = t.bounds_conservative_fraction();
   s.time_of_use_joint_conservative_fraction = t.joints_conservative_fraction();
+  s.time_of_use_worst_min_eigenvalue = t.worst_min_eigenvalue;
   s.logdet_ratio_relative_ours_median = median_or_unset(t.ours());
   s.logdet_ratio_relative_markov_blanket_median = median_or_unset(t.markov_blanket());
 }

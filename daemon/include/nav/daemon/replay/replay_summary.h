@@ -92,6 +92,9 @@ struct ReplaySummary {
   double time_of_use_s = kUnset;  ///< wall time of the checks (not part of wall_s)
   double time_of_use_conservative_fraction = kUnset;        ///< stored bounds
   double time_of_use_joint_conservative_fraction = kUnset;  ///< proposal joints
+  /// Smallest eigenvalue of (ours − exact) over every bound and joint checked (< 0: not
+  /// conservative; its size says whether by rounding or by a real error).
+  double time_of_use_worst_min_eigenvalue = kUnset;
   double logdet_ratio_relative_ours_median = kUnset;
   double logdet_ratio_relative_markov_blanket_median = kUnset;
   // Consistency of the bounds (final analysis).
