@@ -112,6 +112,21 @@ TEST(NavtoolCovariance, SmallGridFixedBudgetStaysConservative) {
   EXPECT_GT(j["markov_blanket_overconfident_fraction"].get<double>(), 0.5);
 }
 
+TEST(NavtoolCovariance, KeptFactorIsTightAndConservativeAtTheTimeOfUse) {
+  NAV_REQUIRE_DATA(path, "posegraphs/smallGrid3D.g2o");
+  const RunResult r = run_navtool(args_for(
+      path.string(), "--json --preconditioner kept-factor --refresh-interval 10 --checks 20"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["kept_factor"], true);
+  EXPECT_EQ(j["iterations_median"], 1.0);  // M = Λ: one iteration is the direct solve
+  EXPECT_EQ(j["refreshes"], 13);           // 124 steps, the interval only
+  EXPECT_EQ(j["conservative_fraction"], 1.0);
+  EXPECT_EQ(j["time_of_use_conservative_fraction"], 1.0);
+  EXPECT_EQ(j["time_of_use_joint_conservative_fraction"], 1.0);
+  EXPECT_LT(j["logdet_ratio_relative_ours"]["median"].get<double>(), 1.0);
+}
+
 TEST(NavtoolCovariance, ToleranceModeAtTheIterationCapSucceedsAndCountsTheCappedSteps) {
   NAV_REQUIRE_DATA(path, "posegraphs/smallGrid3D.g2o");
   const RunResult r =
