@@ -28,9 +28,12 @@ struct DiveRun {
 
 DiveRun run_dive(const nav::testing::SyntheticDiveOptions& dive_options, bool links,
                  core::RecoveryPreconditioner preconditioner =
-                     core::RecoveryPreconditioner::kBlockJacobi) {
+                     core::RecoveryPreconditioner::kBlockJacobi,
+                 bool keep_factor_equal = false) {
   NavdConfig config = sim_config();
   config.filter.recovery_preconditioner = preconditioner;
+  config.filter.recovery_keep_factor_equal = keep_factor_equal;
+  config.filter.recovery_refresh_interval = keep_factor_equal ? 10 : 1;
   DiveRun run;
   run.dive = nav::testing::make_synthetic_dive(config, dive_options);
   NavFilterOptions options = filter_options_from_config(config);
@@ -133,6 +136,24 @@ TEST(NavFilter, GatesAGrossOutlier) {
   EXPECT_EQ(outliers_seen, 2);
   EXPECT_EQ(c.outliers_rejected, 2u);
   EXPECT_EQ(c.outliers_accepted, 0u);
+}
+
+// The factor kept equal to Λ: the same gate and conservative bounds, with exact marginals
+// renewed every 10 images only.
+TEST(NavFilter, KeptFactorGatesTheOutliersAndKeepsTheBoundsConservative) {
+  nav::testing::SyntheticDiveOptions o;
+  o.outlier_pairs = {{60, 61}, {70, 72}};
+  const DiveRun run = run_dive(o, true, core::RecoveryPreconditioner::kFactor, true);
+  EXPECT_EQ(run.filter->counters().outliers_rejected, 2u);
+  EXPECT_EQ(run.filter->counters().outliers_accepted, 0u);
+  const NavFilter& f = *run.filter;
+  const core::ExactMarginals exact = exact_of(f);
+  ASSERT_GT(f.esdf().num_blocks(), 20);
+  for (int b = 1; b < f.esdf().num_blocks(); ++b) {
+    double min_eig = 0.0;
+    EXPECT_TRUE(core::is_conservative(f.bounds().bound(b), exact.marginal(b), 1e-9, &min_eig))
+        << "state " << b << " min eigenvalue " << min_eig;
+  }
 }
 
 TEST(NavFilter, DeadReckoningIsLooserThanSlam) {
