@@ -377,6 +377,14 @@ Status CovarianceBounds::update(const LinkProposal& proposal, const Eigen::Matri
                              " is not positive definite (proposal joint not PSD: stale recovery?)"
                              "; bound left unchanged");
   }
+  if (options_.certify_truncation) {
+    // The update's own rounding, like the exact refresh's: a posterior along a strongly
+    // measured direction keeps a margin of only about κ·(posterior / prior) over the filter's
+    // marginal, which the Joseph form's rounding can exceed (docs/consistency.md "Rounding
+    // margin after an update").
+    best_ii = padded(best_ii, options_.rounding_margin);
+    best_rr = padded(best_rr, options_.rounding_margin);
+  }
   store(proposal.state, best_ii);
   if (options_.certify_truncation && best_rr.trace() < robot_bound_.trace()) {
     set_robot_bound(best_rr);
