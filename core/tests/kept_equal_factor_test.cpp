@@ -39,7 +39,8 @@ class RandomSource {
 class LinearFilter {
  public:
   LinearFilter() : esdf_(kD), random_(7) {
-    EXPECT_TRUE(esdf_.initialize(Eigen::VectorXd::Zero(kD), Eigen::MatrixXd::Identity(kD, kD)).ok());
+    EXPECT_TRUE(
+        esdf_.initialize(Eigen::VectorXd::Zero(kD), Eigen::MatrixXd::Identity(kD, kD)).ok());
   }
   void predict(bool keep) {
     const Eigen::MatrixXd F = Eigen::MatrixXd::Identity(kD, kD) + random_.matrix(kD, kD, 0.05);

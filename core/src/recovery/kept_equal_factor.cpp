@@ -45,7 +45,8 @@ using Entry = std::pair<int, double>;  // (row, value) of one column
 cholmod_sparse* to_cholmod(std::vector<std::vector<Entry>>& columns, size_t n, cholmod_common* c) {
   size_t nnz = 0;
   for (auto& col : columns) {
-    std::sort(col.begin(), col.end(), [](const Entry& a, const Entry& b) { return a.first < b.first; });
+    std::sort(col.begin(), col.end(),
+              [](const Entry& a, const Entry& b) { return a.first < b.first; });
     size_t out = 0;
     for (size_t k = 0; k < col.size(); ++k) {
       if (out > 0 && col[out - 1].first == col[k].first) {
@@ -57,8 +58,8 @@ cholmod_sparse* to_cholmod(std::vector<std::vector<Entry>>& columns, size_t n, c
     col.resize(out);
     nnz += out;
   }
-  cholmod_sparse* s =
-      cholmod_allocate_sparse(n, columns.size(), std::max<size_t>(nnz, 1), 1, 1, 0, CHOLMOD_REAL, c);
+  cholmod_sparse* s = cholmod_allocate_sparse(n, columns.size(), std::max<size_t>(nnz, 1), 1, 1, 0,
+                                              CHOLMOD_REAL, c);
   if (s == nullptr) return nullptr;
   auto* p = static_cast<int*>(s->p);
   auto* i = static_cast<int*>(s->i);
@@ -93,8 +94,7 @@ std::vector<int> block_amd(const InformationMatrix& lambda, cholmod_common* c) {
   }
   std::vector<int> order(static_cast<size_t>(nb));
   if (nb == 0) return order;
-  cholmod_sparse* B =
-      cholmod_allocate_sparse(nb, nb, nnz, 1, 1, -1, CHOLMOD_PATTERN, c);
+  cholmod_sparse* B = cholmod_allocate_sparse(nb, nb, nnz, 1, 1, -1, CHOLMOD_PATTERN, c);
   if (B == nullptr) return {};
   auto* p = static_cast<int*>(B->p);
   auto* i = static_cast<int*>(B->i);
@@ -122,11 +122,10 @@ double smallest_pivot(const cholmod_factor& L) {
 }
 
 Status cholmod_failure(const char* where, const cholmod_common& c) {
-  return Status::Error(StatusCode::kNotPositiveDefinite,
-                       std::string("KeptEqualFactor::") + where + ": CHOLMOD status " +
-                           std::to_string(c.status) +
-                           (c.status == CHOLMOD_OK ? " but a pivot <= 0: Λ is not positive definite"
-                                                   : ""));
+  return Status::Error(
+      StatusCode::kNotPositiveDefinite,
+      std::string("KeptEqualFactor::") + where + ": CHOLMOD status " + std::to_string(c.status) +
+          (c.status == CHOLMOD_OK ? " but a pivot <= 0: Λ is not positive definite" : ""));
 }
 
 }  // namespace
@@ -163,10 +162,11 @@ double KeptEqualFactor::factor_nnz() const {
 Status KeptEqualFactor::factor(const InformationMatrix& lambda, int spare_blocks) {
   reset();
   if (lambda.num_blocks() == 0 || spare_blocks < 0) {
-    return Status::Error(StatusCode::kInvalidArgument,
-                         "KeptEqualFactor::factor: needs a non-empty Λ and spare_blocks >= 0 (got " +
-                             std::to_string(lambda.num_blocks()) + " blocks, " +
-                             std::to_string(spare_blocks) + " spare)");
+    return Status::Error(
+        StatusCode::kInvalidArgument,
+        "KeptEqualFactor::factor: needs a non-empty Λ and spare_blocks >= 0 (got " +
+            std::to_string(lambda.num_blocks()) + " blocks, " + std::to_string(spare_blocks) +
+            " spare)");
   }
   cholmod_common* c = &factor_->c;
   const std::vector<int> order = block_amd(lambda, c);
@@ -185,14 +185,16 @@ Status KeptEqualFactor::factor(const InformationMatrix& lambda, int spare_blocks
   for (int b = 0; b < n; ++b) {
     const auto& diagonal = lambda.diagonal_block(b);
     for (int j = 0; j < d; ++j) {
-      for (int i = j; i < d; ++i) lower.emplace_back(slot_row(b, i), slot_row(b, j), diagonal(i, j));
+      for (int i = j; i < d; ++i)
+        lower.emplace_back(slot_row(b, i), slot_row(b, j), diagonal(i, j));
     }
     for (int k = 0; k < lambda.num_neighbours(b); ++k) {
       const int nb = lambda.neighbour(b, k);
       if (slot_[static_cast<size_t>(nb)] < slot_[static_cast<size_t>(b)]) continue;
       const auto& block = lambda.neighbour_block(b, k);  // Λ_{b,nb}: rows b, columns nb
       for (int j = 0; j < d; ++j) {
-        for (int i = 0; i < d; ++i) lower.emplace_back(slot_row(nb, i), slot_row(b, j), block(j, i));
+        for (int i = 0; i < d; ++i)
+          lower.emplace_back(slot_row(nb, i), slot_row(b, j), block(j, i));
       }
     }
   }
@@ -243,8 +245,8 @@ void KeptEqualFactor::add_block(const InformationMatrix& lambda, int block) {
 namespace {
 
 /// Λ_ab − F_ab for stored blocks (zero where neither stores one).
-Eigen::MatrixXd increment(const InformationMatrix& lambda, const InformationMatrix& factored,
-                          int a, int b) {
+Eigen::MatrixXd increment(const InformationMatrix& lambda, const InformationMatrix& factored, int a,
+                          int b) {
   const int d = lambda.block_dim();
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(d, d);
   if (a == b) return lambda.diagonal_block(a) - factored.diagonal_block(a);
@@ -258,7 +260,8 @@ std::vector<std::vector<int>> connected_groups(const InformationMatrix& lambda,
                                                const InformationMatrix& factored,
                                                const std::vector<int>& changed) {
   std::vector<int> index(static_cast<size_t>(factored.num_blocks()), -1);
-  for (size_t k = 0; k < changed.size(); ++k) index[static_cast<size_t>(changed[k])] = static_cast<int>(k);
+  for (size_t k = 0; k < changed.size(); ++k)
+    index[static_cast<size_t>(changed[k])] = static_cast<int>(k);
   std::vector<int> parent(changed.size());
   std::iota(parent.begin(), parent.end(), 0);
   auto root = [&](int x) {
@@ -270,7 +273,8 @@ std::vector<std::vector<int>> connected_groups(const InformationMatrix& lambda,
       const int nb = m.neighbour(a, k);
       if (nb >= factored.num_blocks() || index[static_cast<size_t>(nb)] < 0) continue;
       if (increment(lambda, factored, a, nb).isZero(0.0)) continue;
-      parent[static_cast<size_t>(root(index[static_cast<size_t>(a)]))] = root(index[static_cast<size_t>(nb)]);
+      parent[static_cast<size_t>(root(index[static_cast<size_t>(a)]))] =
+          root(index[static_cast<size_t>(nb)]);
     }
   };
   for (int a : changed) {
@@ -281,14 +285,16 @@ std::vector<std::vector<int>> connected_groups(const InformationMatrix& lambda,
   for (size_t k = 0; k < changed.size(); ++k) {
     groups[static_cast<size_t>(root(static_cast<int>(k)))].push_back(changed[k]);
   }
-  groups.erase(std::remove_if(groups.begin(), groups.end(), [](const auto& g) { return g.empty(); }),
-               groups.end());
+  groups.erase(
+      std::remove_if(groups.begin(), groups.end(), [](const auto& g) { return g.empty(); }),
+      groups.end());
   return groups;
 }
 
 }  // namespace
 
-bool KeptEqualFactor::rank_update(const InformationMatrix& lambda, const std::vector<int>& changed) {
+bool KeptEqualFactor::rank_update(const InformationMatrix& lambda,
+                                  const std::vector<int>& changed) {
   const int d = lambda.block_dim();
   std::vector<std::vector<Entry>> plus, minus;
   for (std::vector<int> group : connected_groups(lambda, factored_, changed)) {
@@ -312,8 +318,8 @@ bool KeptEqualFactor::rank_update(const InformationMatrix& lambda, const std::ve
       target.emplace_back();
       const Eigen::VectorXd column = std::sqrt(std::abs(value)) * eig.eigenvectors().col(e);
       for (Eigen::Index r = 0; r < m; ++r) {
-        target.back().emplace_back(slot_row(group[static_cast<size_t>(r / d)], static_cast<int>(r % d)),
-                                   column[r]);
+        target.back().emplace_back(
+            slot_row(group[static_cast<size_t>(r / d)], static_cast<int>(r % d)), column[r]);
       }
     }
   }

@@ -44,11 +44,11 @@ namespace nav::core {
 
 /// What the last update() did (for the recovery's diagnostics and the tests).
 struct KeptFactorUpdate {
-  int rows_replaced = 0;  ///< blocks deleted and re-added (the robot and its neighbours)
-  int rows_added = 0;     ///< appended blocks row-added into reserved slots
-  int blocks_updated = 0; ///< other blocks whose increment was applied by a rank update
-  int update_rank = 0;    ///< columns of C₊ (rank update)
-  int downdate_rank = 0;  ///< columns of C₋ (downdate; 0 under the PSD premise)
+  int rows_replaced = 0;   ///< blocks deleted and re-added (the robot and its neighbours)
+  int rows_added = 0;      ///< appended blocks row-added into reserved slots
+  int blocks_updated = 0;  ///< other blocks whose increment was applied by a rank update
+  int update_rank = 0;     ///< columns of C₊ (rank update)
+  int downdate_rank = 0;   ///< columns of C₋ (downdate; 0 under the PSD premise)
 };
 
 class KeptEqualFactor final : public Preconditioner {
