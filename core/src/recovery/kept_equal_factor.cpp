@@ -151,6 +151,7 @@ void KeptEqualFactor::reset() {
   slot_.clear();
   present_.clear();
   factored_ = InformationMatrix(1);
+  last_update_ = {};  // a refactorisation modified nothing
 }
 
 double KeptEqualFactor::factor_nnz() const {

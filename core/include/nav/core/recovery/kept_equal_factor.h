@@ -42,7 +42,7 @@
 
 namespace nav::core {
 
-/// What the last update() did (for the recovery's diagnostics and the tests).
+/// What the last update() did, all zero after factor() or reset() (diagnostics and tests).
 struct KeptFactorUpdate {
   int rows_replaced = 0;   ///< blocks deleted and re-added (the robot and its neighbours)
   int rows_added = 0;      ///< appended blocks row-added into reserved slots
