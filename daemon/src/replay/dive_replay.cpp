@@ -128,6 +128,15 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
     // The twin already runs on its own thread (FilterWorker): a recovery thread of its own
     // would only compete with the SLAM filter's for the cores. Synchronous recovery.
     dr.recovery_thread = false;
+    // The baseline is the best dead reckoning, not the SLAM filter's recovery without links: a
+    // recovery that has not converged moves the means the predictions are linearised at, and
+    // block Jacobi's 5 iterations on a chain of hundreds of states leave metres of drift that is
+    // the solver's, not the sensors'. A factor kept equal to Λ solves exactly in one iteration,
+    // and a chain's factor has little fill (docs/consistency.md "The dead-reckoning baseline").
+    dr.recovery.preconditioner = core::RecoveryPreconditioner::kFactor;
+    dr.recovery.keep_factor_equal = true;
+    // No link proposal reads the twin's bounds: no exact-marginal refreshes of them.
+    dr.recovery.refresh_interval = std::numeric_limits<int>::max();
     run.dead_reckoning = std::make_unique<NavFilter>(dr, nullptr);
   }
   PublishedRecorder published;

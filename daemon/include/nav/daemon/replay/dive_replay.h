@@ -12,7 +12,9 @@
 // whose results the filter takes at data times (filter.recovery_handoff_s; nav_filter.h
 // "Recovery thread"); either way the result does not depend on thread timing: as
 // fast as possible, the same log and config give the same output. The dead-reckoning twin
-// recovers synchronously (it already runs on its own thread).
+// recovers synchronously (it already runs on its own thread) and exactly, whatever the config
+// (a factor kept equal to its Λ: the baseline is the best dead reckoning, not the SLAM
+// filter's recovery without links).
 //
 // Time of use (ReplayOptions::time_of_use_every_images): at chosen images, before their link
 // proposal, the bounds and proposal joints against the exact marginals of that moment.
