@@ -184,6 +184,38 @@ TEST(Metrics, NeesOfOneStateByHand) {
   EXPECT_NEAR(r.component_mean[5], 0.01 / 4.0, 1e-9);
 }
 
+// Two published poses against a straight truth: one off by 0.2 m in x with a correlated x-y
+// covariance (the NEES uses the full 6x6, the components only its diagonal), one off by 0.1 rad
+// in heading across the ±π wrap; one outside the truth span, one with a singular covariance.
+TEST(Metrics, PublishedNeesByHandAndPerComponent) {
+  std::vector<TimedPose> truth(2);
+  truth[0].pose << 0, 0, 0, 0, 0, M_PI - 0.05;
+  truth[1].t_us = 10;
+  truth[1].pose << 10, 0, 0, 0, 0, M_PI - 0.05;
+  daemon::PublishedSolution a, b;
+  a.t_us = 5;
+  a.pose << 5.2, 0, 0, 0, 0, M_PI - 0.05;
+  a.covariance = core::Mat6::Identity() * 0.01;
+  a.covariance(0, 1) = a.covariance(1, 0) = 0.005;
+  b.t_us = 10;
+  b.pose << 10, 0, 0, 0, 0, -M_PI + 0.05;  // heading error +0.1 rad
+  b.covariance = core::Mat6::Identity() * 0.01;
+  daemon::PublishedSolution outside = b, singular = b;
+  outside.t_us = 11;
+  singular.covariance.setZero();
+  const PublishedNees r = published_nees({a, b, outside, singular}, truth);
+  ASSERT_EQ(r.samples, 2u);
+  EXPECT_EQ(r.outside_truth, 1u);
+  EXPECT_EQ(r.not_positive_definite, 1u);
+  // a: [0.2, 0] through [[0.01, 0.005], [0.005, 0.01]]⁻¹ = 0.04 * 0.01 / 0.000075 = 16/3.
+  const double nees_a = 16.0 / 3.0, nees_b = 1.0;
+  EXPECT_NEAR(r.mean, 0.5 * (nees_a + nees_b), 1e-9);
+  EXPECT_NEAR(r.exceed_99_fraction, 0.0, 0.0);
+  EXPECT_NEAR(r.component_mean[0], 0.5 * 4.0, 1e-9);  // 0.04 / 0.01 in a, 0 in b
+  EXPECT_NEAR(r.component_mean[1], 0.0, 1e-12);
+  EXPECT_NEAR(r.component_mean[5], 0.5 * 1.0, 1e-9);  // 0.01 / 0.01 in b
+}
+
 TEST(Metrics, RobotPoseNeesIsTheNewestStateWithATruthPose) {
   TrueImage a, b;
   a.frame_id = 5;

@@ -166,12 +166,14 @@ PublishedNees published_nees(const std::vector<daemon::PublishedSolution>& publi
     const core::Vec6 e = core::pose_minus(p.pose, *t);
     const double nees = e.dot(llt.solve(e));
     sum += nees;
+    out.component_mean += e.cwiseAbs2().cwiseQuotient(p.covariance.diagonal());
     exceed += nees > kChi2Dof6Quantile99 ? 1 : 0;
     ++out.samples;
   }
   if (out.samples > 0) {
     out.mean = sum / static_cast<double>(out.samples);
     out.exceed_99_fraction = static_cast<double>(exceed) / static_cast<double>(out.samples);
+    out.component_mean /= static_cast<double>(out.samples);
   }
   return out;
 }
@@ -260,11 +262,13 @@ json compute_metrics(const ReplayOutput& replay, const DiveData* dive,
                              : json(nullptr);
   m["published_nees_mean"] = nullptr;
   m["published_nees_exceed_99_fraction"] = nullptr;
+  m["published_nees_component_mean"] = nullptr;
   if (dive && !replay.published.empty()) {
     const PublishedNees nees = published_nees(replay.published, dive->truth);
     if (nees.samples > 0) {
       m["published_nees_mean"] = nees.mean;
       m["published_nees_exceed_99_fraction"] = nees.exceed_99_fraction;
+      m["published_nees_component_mean"] = component_json(nees.component_mean);
     }
     m["published_nees_samples"] = nees.samples;
   }

@@ -70,6 +70,9 @@ struct PublishedNees {
   size_t samples = 0, outside_truth = 0, not_positive_definite = 0;
   double mean = 0.0;
   double exceed_99_fraction = 0.0;  ///< fraction above chi2(6, 0.99) = kChi2Dof6Quantile99
+  /// Mean of e_k² / P_kk per component (x, y, z, roll, pitch, heading): 1 each if consistent;
+  /// says which part of the published covariance is over-confident.
+  core::Vec6 component_mean = core::Vec6::Zero();
 };
 inline constexpr double kChi2Dof6Quantile99 = 16.811894;
 PublishedNees published_nees(const std::vector<daemon::PublishedSolution>& published,
