@@ -1,12 +1,14 @@
 // The replay's dead-reckoning twin is the baseline of "SLAM against dead reckoning": it must be
 // the best dead reckoning the sensors allow, not the SLAM filter's recovery without links. On a
 // simulated dive through the replay library (dive-log source, decoders, time ordering, the twin
-// on its worker thread), the twin's own means (the linearisation points of its predictions)
-// must equal the direct solve of its Λ μ = η, and its final XY error must lie inside its exact
-// marginal's 99.9 % ellipse. A recovery that has not converged (block Jacobi at 5 iterations on
-// a chain of 100 delayed states) fails the first check by metres: 6.9 m on this dive.
+// on its worker thread), one step of the twin's recovery (what it runs at every image to set
+// the means its predictions are linearised at) must give the direct solve of its Λ μ = η, and
+// its final XY error must lie inside its exact marginal's 99.9 % ellipse. A recovery that has
+// not converged (block Jacobi at 5 iterations per image on a chain of 100 delayed states)
+// fails the first check by metres: 6.9 m on this dive.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 

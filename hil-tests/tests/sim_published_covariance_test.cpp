@@ -5,15 +5,16 @@
 // keeps a factor equal to Λ and refreshes the bounds at every image, the published covariance
 // must be conservative (published − exact PSD) and tight (each pose variance's median ratio to
 // the exact one within 10 %; a link between delayed states tightens no bound, so between such a
-// link and the next image it may be looser). The NEES of the pose errors against truth is printed
-// against both covariances, per component: the over-confidence of the published heading
-// (docs/consistency.md "The published covariance by component") is then either the propagation's or
-// the filter's own.
+// link and the next image it may be looser). The mean e² / P of the pose errors against truth
+// is printed per component against both covariances: where they agree, an over-confidence is
+// the filter's own, not the publication's (docs/consistency.md "The published covariance by
+// component").
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <vector>
 
 #include "nav/core/geometry/rotation.h"
 #include "nav/core/recovery/consistency.h"
