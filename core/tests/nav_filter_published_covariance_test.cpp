@@ -1,4 +1,4 @@
-// NavFilter::robot_covariance() (nav_filter.h "Published covariance") against the dense
+// NavFilter::robot_covariance() (nav_filter.h "Published solution") against the dense
 // marginal of the full filter: on a small run (a vehicle heading north at 0.5 m/s with noise-free
 // DVL, attitude and depth, an image every 2 s, exact recovery at images, no registrations), at
 // every non-image measurement the propagated 12x12 covariance must equal block (0, 0) of Λ⁻¹
@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <numbers>
 #include <variant>
 #include <vector>
 
@@ -61,14 +62,31 @@ TEST(NavFilterPublishedCovariance, EqualsTheDenseRobotMarginalBetweenImages) {
         << "at t = " << filter.time_us() << " us\npublished\n"
         << published << "\nexact\n"
         << exact;
-    moved += (published - filter.images().back().robot_covariance).norm() >
-                     1e-3 * exact.norm()
-                 ? 1
-                 : 0;
+    moved +=
+        (published - filter.images().back().robot_covariance).norm() > 1e-3 * exact.norm() ? 1 : 0;
     ++checked;
   }
   EXPECT_GT(checked, 100);
   EXPECT_GT(moved, checked / 2);  // most checks are well after the last image
+}
+
+// The published mean includes an update applied without a prediction (a measurement less than
+// min_predict_step_s after the filter's time): a heading 0.2 deg off the estimate moves
+// robot_mean() towards it, and the ESDF's own robot mean (the last prediction's linearisation
+// point) stays where it was.
+TEST(NavFilterPublishedCovariance, PublishedMeanIncludesAnUpdateWithoutPrediction) {
+  NavFilter filter(options(), nullptr);
+  for (const Measurement& m : run(6.0)) ASSERT_TRUE(filter.process(m).ok());
+  const Vec12 before = filter.robot_mean();
+  const Vec12 linearisation_point = filter.esdf().mean_block(Esdf::kRobotBlock);
+  const double z = before[5] + 0.2 * std::numbers::pi / 180.0;
+  const std::int64_t t = filter.time_us() + 4'000;  // within min_predict_step_s (5 ms)
+  ASSERT_TRUE(filter.process(Attitude{at(t, 1), 0.0, 0.0, z, false, true}).ok());
+  ASSERT_EQ(filter.time_us(), t - 4'000);  // applied at the filter's time
+  const double moved = filter.robot_mean()[5] - before[5];
+  EXPECT_GT(moved, 0.05 * (z - before[5]));
+  EXPECT_LT(moved, z - before[5]);
+  EXPECT_EQ(filter.esdf().mean_block(Esdf::kRobotBlock), linearisation_point);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -36,14 +37,13 @@ StateRecoveryOptions filter_thread_recovery(const NavFilterOptions& options) {
   return o;
 }
 
-
 /// The options, checked (std::invalid_argument naming the values otherwise).
 NavFilterOptions validated(NavFilterOptions o) {
   if (!(o.max_predict_step_s > 0.0) ||
       !(o.min_predict_step_s >= 0.0 && o.min_predict_step_s < o.max_predict_step_s) ||
-      !(o.default_altitude_m > 0.0) ||
-      !(o.camera_gate_chi2 > 0.0) || !(o.initial_xy_sigma_m > 0.0) ||
-      !(o.initial_velocity_sigma_mps > 0.0) || !(o.initial_rate_sigma_radps > 0.0)) {
+      !(o.default_altitude_m > 0.0) || !(o.camera_gate_chi2 > 0.0) ||
+      !(o.initial_xy_sigma_m > 0.0) || !(o.initial_velocity_sigma_mps > 0.0) ||
+      !(o.initial_rate_sigma_radps > 0.0)) {
     throw std::invalid_argument(
         "NavFilterOptions: max_predict_step_s, default_altitude_m, camera_gate_chi2 and the "
         "initial sigmas must be > 0, min_predict_step_s in [0, max_predict_step_s)");
@@ -87,10 +87,14 @@ Eigen::Vector2d footprint_half_extent_per_altitude(const std::vector<SensorModel
 
 const char* to_string(LinkOutcome outcome) {
   switch (outcome) {
-    case LinkOutcome::kAccepted: return "accepted";
-    case LinkOutcome::kGated: return "gated";
-    case LinkOutcome::kRegistrationFailed: return "registration_failed";
-    case LinkOutcome::kNotRegistered: return "not_registered";
+    case LinkOutcome::kAccepted:
+      return "accepted";
+    case LinkOutcome::kGated:
+      return "gated";
+    case LinkOutcome::kRegistrationFailed:
+      return "registration_failed";
+    case LinkOutcome::kNotRegistered:
+      return "not_registered";
   }
   return "unknown";
 }
@@ -181,7 +185,8 @@ Status NavFilter::process(const Measurement& m) {
   if (jobs_.due(t_us)) take_recovery_result();  // hand-off at a data time
   // Less than min_predict_step_s after the filter's time: applied at that time (a very short
   // prediction makes Q's pose block tiny and Λ ill-conditioned).
-  const auto min_step_us = static_cast<std::int64_t>(std::llround(options_.min_predict_step_s * 1e6));
+  const auto min_step_us =
+      static_cast<std::int64_t>(std::llround(options_.min_predict_step_s * 1e6));
   if (t_us - time_us_ >= min_step_us) {
     if (Status s = advance_to(t_us); !s.ok()) return s;
   }
@@ -321,7 +326,7 @@ Status NavFilter::predict_once(double dt_s) {
   return Status::Ok();
 }
 
-void NavFilter::relinearise_robot() {
+std::optional<Vec12> NavFilter::conditional_robot_mean() const {
   const InformationMatrix& info = filter_.information();
   const int r = Esdf::kRobotBlock;
   Vec12 b = filter_.information_vector().head<12>();
@@ -329,12 +334,24 @@ void NavFilter::relinearise_robot() {
     b.noalias() -= info.neighbour_block(r, k) * filter_.mean_block(info.neighbour(r, k));
   }
   const Eigen::LLT<Mat12> llt(Mat12(info.diagonal_block(r)));
-  if (llt.info() != Eigen::Success) return;
+  if (llt.info() != Eigen::Success) return std::nullopt;
+  const Vec12 robot = llt.solve(b);
+  if (!robot.allFinite()) return std::nullopt;
+  return robot;
+}
+
+void NavFilter::relinearise_robot() {
   // Not wrapped: the angles of the mean must stay on the branch η encodes. Wrapping only μ_r
   // (η_r unchanged) shifts the next update's η_r += Hᵀ R⁻¹ (ν + H μ_r) by 2π·Hᵀ R⁻¹ H on a
   // heading that crossed ±π, which moved the whole map 5.4 m in one turn of the default dive.
-  const Vec12 robot = llt.solve(b);
-  if (robot.allFinite()) (void)filter_.set_mean_block(r, robot);
+  if (const std::optional<Vec12> robot = conditional_robot_mean()) {
+    (void)filter_.set_mean_block(Esdf::kRobotBlock, *robot);
+  }
+}
+
+Vec12 NavFilter::robot_mean() const {
+  if (!initialised_) return Vec12::Zero();
+  return conditional_robot_mean().value_or(Vec12(filter_.mean_block(Esdf::kRobotBlock)));
 }
 
 template <class Model>

@@ -39,7 +39,7 @@ struct PublishedRecorder {
     if (!slam.initialised() || slam.time_us() < next_us) return;
     PublishedSolution p;
     p.t_us = slam.time_us();
-    p.pose = slam.esdf().mean_block(core::Esdf::kRobotBlock).head<6>();
+    p.pose = slam.robot_mean().head<6>();
     p.covariance = slam.robot_covariance().topLeftCorner<6, 6>();
     out.push_back(p);
     // On the grid first + k·period (a rate of exactly 1/period while measurements come faster).

@@ -127,7 +127,7 @@ std::optional<core::Mat12> robot_only_covariance(const core::Esdf& esdf) {
 
 void LinkPublisher::update_board(const daemon::NavFilter& filter) {
   if (!filter.initialised()) return;
-  const core::Vec12 robot = filter.esdf().mean_block(core::Esdf::kRobotBlock);
+  const core::Vec12 robot = filter.robot_mean();  // after every update (nav_filter.h)
   const auto& images = filter.images();
   const daemon::NavFilterCounters& c = filter.counters();
   char line[160];

@@ -34,21 +34,21 @@
 //   the certificate the bounds need); hand it to the bounds (certified, bounds.h); evaluate
 //   the link hypothesis from the robot (= this image) to every earlier delayed state and
 //   propose the most probable ones, at most proposal.max_per_image (link_proposer.h); look each
-//   pair up in the RegistrationTable, gate it and apply accepted links to the ESDF and to Σ~_ii (bounds
-//   update, constant time). The next prediction keeps the robot as this image's delayed state.
+//   pair up in the RegistrationTable, gate it and apply accepted links to the ESDF and to Σ~_ii
+//   (bounds update, constant time). The next prediction keeps the robot as this image's delayed
+//   state.
 // * Recovery executor (recovery_thread): after the image's links the filter submits a job on
 //   a snapshot of Λ, η and the warm start, and takes its result at data time t +
 //   recovery_handoff_s, the next image or finish(): the warm start becomes the result (what
 //   the robot did since stays in A and P, P moved by A (Σ'_tt − Σ_tt) Aᵀ) and the snapshot's
 //   delayed states take its mean. Outputs are bit-identical to synchronous hand-offs.
-// * Published covariance (robot_covariance()): the certified robot bound B_rr of bounds.h. It
-//   is propagated with every prediction (F B Fᵀ + Q) and Kalman-updated with every DVL, heading,
-//   depth and attitude measurement (a constant-time 12x12 recursion), tightened to the
-//   recovered Σ_rr plus its certified error at each image and updated with the image's links;
-//   so it is current at the filter's time and >= the robot's marginal Σ_rr whatever the PCG
-//   budget (bounds.h GUARANTEE). With an exact recovery and no link since the last image it
-//   equals Σ_rr. (The recovered Σ_rr itself can be smaller than Σ_rr after a few PCG
-//   iterations: over-confident where the map is poorly converged.)
+// * Published solution (robot_mean(), robot_covariance()): the covariance is the certified robot
+//   bound B_rr of bounds.h, propagated with every prediction (F B Fᵀ + Q), Kalman-updated with
+//   every DVL, heading, depth and attitude measurement (a constant-time 12x12 recursion), reset
+//   to the recovered Σ_rr plus its certified error at each image and updated with its links: so
+//   it is current and >= Σ_rr whatever the PCG budget (bounds.h GUARANTEE), = Σ_rr with an exact
+//   recovery and no link since the last image. The mean is the robot's conditional mean after
+//   every update (the ESDF's robot mean is the last prediction's linearisation point: it lags).
 
 #include <cstdint>
 #include <functional>
@@ -106,9 +106,9 @@ class NavFilter {
   const std::vector<ImageRecord>& images() const { return images_; }
   const std::vector<LinkRecord>& links() const { return links_; }
   const std::vector<ProposalRecord>& proposals() const { return proposals_; }
-  /// The robot's covariance at time_us() (file comment "Published covariance"): what navd
-  /// publishes with the robot's mean. Zero before initialisation.
+  /// What navd publishes at time_us() (file comment "Published solution"); zero until initialised.
   Mat12 robot_covariance() const;
+  Vec12 robot_mean() const;
   /// Pairs waiting for their registration, in proposal order (not checkpointed).
   std::vector<PendingRegistration> pending_registrations() const { return pending_.list(); }
   /// Sequence number of the newest deferred pair (0: none yet).
@@ -144,6 +144,7 @@ class NavFilter {
   Status initialise(std::int64_t t_us);
   Status advance_to(std::int64_t t_us);
   Status predict_once(double dt_s);
+  std::optional<Vec12> conditional_robot_mean() const;
   void relinearise_robot();
   void update_robot(const Measurement& m);
   template <class Model>
