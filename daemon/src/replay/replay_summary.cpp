@@ -26,11 +26,12 @@ json optional_pose_json(const std::optional<core::Vec6>& x) {
   return x ? pose_json(*x) : json(nullptr);
 }
 
-/// The robot's running pose, or none while the filter has no state yet (e.g. the
-/// dead-reckoning twin of a resumed replay stopped before its first measurements).
-std::optional<core::Vec6> robot_pose(const core::Esdf& filter) {
-  if (!filter.initialized()) return std::nullopt;
-  return filter.mean().head<6>();
+/// The robot's published pose (NavFilter::robot_mean(): after every update), or none while the
+/// filter has no state yet (e.g. the dead-reckoning twin of a resumed replay stopped before its
+/// first measurements).
+std::optional<core::Vec6> robot_pose(const core::NavFilter& filter) {
+  if (!filter.initialised()) return std::nullopt;
+  return filter.robot_mean().head<6>();
 }
 
 // Readers for from_json: a key that is absent or of another type leaves `out` unchanged.
@@ -265,9 +266,9 @@ ReplaySummary make_replay_summary(const ReplayRun& run, const ReplayAnalysis& an
   s.realtime_factor = run.wall_s > 0.0 ? run.log_span_s / run.wall_s : 0.0;
   s.analysis_s = analysis.analysis_s;
   s.final_pose = analysis.robot_mean.head<6>();
-  s.final_pose_running = robot_pose(run.slam->esdf());
+  s.final_pose_running = robot_pose(*run.slam);
   s.has_dead_reckoning = run.dead_reckoning != nullptr;
-  if (run.dead_reckoning) s.dead_reckoning_final_pose = robot_pose(run.dead_reckoning->esdf());
+  if (run.dead_reckoning) s.dead_reckoning_final_pose = robot_pose(*run.dead_reckoning);
   s.max_cg_relative_residual = c.max_cg_relative_residual;
   s.cg_iterations_per_image = run.slam->options().recovery.iterations_per_step;
   s.recovery = run.slam->options().recovery_thread
