@@ -3,6 +3,7 @@
 #include "nav/core/models/constant_velocity.h"
 
 #include <cmath>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
@@ -30,11 +31,60 @@ Status check_psd(const Vec3& psd, const char* field) {
   return Status::Ok();
 }
 
+Status check_restoring(const AttitudeRestoringOptions& o) {
+  auto bad = [](const char* field, int k, double v, const char* expected) {
+    std::ostringstream msg;
+    msg << "ConstantVelocityOptions.attitude_restoring." << field;
+    if (k >= 0) msg << "[" << k << "]";
+    msg << " = " << v << ", expected " << expected;
+    return Status::Error(StatusCode::kInvalidArgument, msg.str());
+  };
+  for (int k = 0; k < 2; ++k) {
+    if (!std::isfinite(o.period_s[k]) || o.period_s[k] < 0.0)
+      return bad("period_s", k, o.period_s[k], "finite and >= 0");
+    if (!std::isfinite(o.damping_ratio[k]) || o.damping_ratio[k] < 0.0)
+      return bad("damping_ratio", k, o.damping_ratio[k], "finite and >= 0");
+    if (!std::isfinite(o.trim_rad[k])) return bad("trim_rad", k, o.trim_rad[k], "finite");
+  }
+  if (!std::isfinite(o.pitch_per_heave_rad_per_mps))
+    return bad("pitch_per_heave_rad_per_mps", -1, o.pitch_per_heave_rad_per_mps, "finite");
+  return Status::Ok();
+}
+
+/// One axis's oscillator: omega^2 and 2 zeta omega (0, 0 when its period is 0: random walk).
+struct Oscillator {
+  double omega2 = 0.0, damping = 0.0;
+};
+
+Oscillator oscillator(const AttitudeRestoringOptions& o, int axis) {
+  if (!(o.period_s[axis] > 0.0)) return {};
+  const double omega = 2.0 * std::numbers::pi / o.period_s[axis];
+  return {omega * omega, 2.0 * o.damping_ratio[axis] * omega};
+}
+
+/// Adds dt g(x) to the roll and pitch rates of x_next and dt dg/dx to F (file comment).
+void add_restoring(const AttitudeRestoringOptions& o, const Vec12& x, double dt_s, Vec12& x_next,
+                   Mat12* F) {
+  const double c = o.pitch_per_heave_rad_per_mps;
+  const double equilibrium[2] = {o.trim_rad[0], o.trim_rad[1] + c * x[kW]};
+  for (int axis = 0; axis < 2; ++axis) {
+    const Oscillator s = oscillator(o, axis);
+    const int angle = kRoll + axis, rate = kP + axis;
+    const double offset = wrap_angle(x[angle] - equilibrium[axis]);
+    x_next[rate] += dt_s * (-s.omega2 * offset - s.damping * x[rate]);
+    if (F == nullptr) continue;
+    (*F)(rate, angle) -= dt_s * s.omega2;
+    (*F)(rate, rate) -= dt_s * s.damping;
+    if (axis == 1) (*F)(rate, kW) += dt_s * s.omega2 * c;
+  }
+}
+
 }  // namespace
 
 Status ConstantVelocityOptions::validate() const {
   if (Status s = check_psd(accel_psd, "accel_psd"); !s.ok()) return s;
-  return check_psd(angular_accel_psd, "angular_accel_psd");
+  if (Status s = check_psd(angular_accel_psd, "angular_accel_psd"); !s.ok()) return s;
+  return check_restoring(attitude_restoring);
 }
 
 ConstantVelocityModel::ConstantVelocityModel(const ConstantVelocityOptions& options)
@@ -66,6 +116,8 @@ Vec12 ConstantVelocityModel::predict(const Vec12& x, double dt_s, Mat12* F) cons
     F->block<3, 1>(kRoll, kPitch) += dt_s * dJ2_dpitch(rpy) * omega_body;
     F->block<3, 3>(kRoll, kP) = dt_s * J2;
   }
+  if (options_.attitude_restoring.enabled())
+    add_restoring(options_.attitude_restoring, x, dt_s, x_next, F);
   return x_next;
 }
 

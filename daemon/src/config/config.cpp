@@ -2,6 +2,7 @@
 // Schema in config.h and config/README.md.
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <optional>
 #include <sstream>
 #include <string_view>
@@ -31,8 +32,38 @@ core::Vec3 read_psd(const YamlReader& r) {
   return out;
 }
 
+/// Two numbers, each in [lo, hi].
+Eigen::Vector2d read_pair(const YamlReader& r, double lo, double hi) {
+  const std::vector<YamlReader> items = r.elements();
+  if (items.size() != 2)
+    r.fail("expected 2 numbers [roll, pitch], got " + std::to_string(items.size()));
+  Eigen::Vector2d out;
+  for (int i = 0; i < 2; ++i) {
+    const double v = items[static_cast<std::size_t>(i)].as_double();
+    if (v < lo || v > hi)
+      items[static_cast<std::size_t>(i)].fail(std::to_string(v) + " is not in " +
+                                              detail::range_text(lo, hi));
+    out[i] = v;
+  }
+  return out;
+}
+
+/// filter.attitude_restoring (core AttitudeRestoringOptions; angles in degrees here).
+core::AttitudeRestoringOptions parse_attitude_restoring(const YamlReader& a) {
+  a.expect_map({"period_s", "damping_ratio", "trim_deg", "pitch_per_heave_deg_per_mps"});
+  constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+  core::AttitudeRestoringOptions o;
+  if (a.has("period_s")) o.period_s = read_pair(a.at("period_s"), 0.0, 3600.0);
+  if (a.has("damping_ratio")) o.damping_ratio = read_pair(a.at("damping_ratio"), 0.0, 100.0);
+  if (a.has("trim_deg")) o.trim_rad = kRadPerDeg * read_pair(a.at("trim_deg"), -45.0, 45.0);
+  double per_heave_deg = 0.0;
+  a.read("pitch_per_heave_deg_per_mps", per_heave_deg, -90.0, 90.0);
+  o.pitch_per_heave_rad_per_mps = kRadPerDeg * per_heave_deg;
+  return o;
+}
+
 FilterConfig parse_filter(const YamlReader& f) {
-  f.expect_map({"process_noise_psd", "cg_iterations_per_step", "latency_window_ms",
+  f.expect_map({"process_noise_psd", "attitude_restoring", "cg_iterations_per_step", "latency_window_ms",
                 "gating_chi2_threshold", "recovery_thread", "recovery_handoff_s",
                 "recovery_preconditioner", "recovery_refresh_interval", "recovery_refresh_residual",
                 "registration_wait_s", "max_pending_registrations", "proposal_min_probability",
@@ -47,6 +78,9 @@ FilterConfig parse_filter(const YamlReader& f) {
     if (p.has("angular_accel_rad2ps3")) {
       filter.process_noise.angular_accel_psd = read_psd(p.at("angular_accel_rad2ps3"));
     }
+  }
+  if (f.has("attitude_restoring")) {
+    filter.process_noise.attitude_restoring = parse_attitude_restoring(f.at("attitude_restoring"));
   }
   f.read("cg_iterations_per_step", filter.cg_iterations_per_step, 1, 1000);
   f.read("latency_window_ms", filter.latency_window_ms, 0.0, 60000.0);

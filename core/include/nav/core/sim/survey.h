@@ -43,7 +43,7 @@ struct SurveyOptions {
   double camera_direction_sigma_rad = 0.5 * 3.14159265358979323846 / 180.0;  ///< az, el
   double camera_rotation_sigma_rad = 0.2 * 3.14159265358979323846 / 180.0;   ///< rpy_ab
   /// Process noise of truth and filter (constant-velocity model).
-  ConstantVelocityOptions process{Vec3::Constant(1e-4), Vec3::Constant(1e-6)};
+  ConstantVelocityOptions process{Vec3::Constant(1e-4), Vec3::Constant(1e-6), {}};
   std::uint64_t seed = 1;
 
   /// kInvalidArgument naming the field when a value is out of range.
