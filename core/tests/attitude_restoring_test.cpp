@@ -21,7 +21,7 @@ using nav::testing::numeric_jacobian;
 /// Values of the order identified on the simulated vehicle (docs/consistency.md).
 ConstantVelocityOptions restoring_options() {
   ConstantVelocityOptions o;
-  o.attitude_restoring.period_s << 7.3, 9.0;
+  o.attitude_restoring.natural_period_s << 7.3, 9.0;
   o.attitude_restoring.damping_ratio << 0.17, 0.14;
   o.attitude_restoring.trim_rad << 0.003, 0.02;
   o.attitude_restoring.pitch_per_heave_rad_per_mps = -0.1;
@@ -88,7 +88,7 @@ TEST(AttitudeRestoring, SettlesAtTheEquilibriumWithTheDampedPeriod) {
   ASSERT_GE(p.upward_crossings_s.size(), 4u);
   const double measured_s = (p.upward_crossings_s[3] - p.upward_crossings_s[0]) / 3.0;
   const double zeta = a.damping_ratio[0];
-  EXPECT_NEAR(measured_s, a.period_s[0] / std::sqrt(1.0 - zeta * zeta), 0.05);
+  EXPECT_NEAR(measured_s, a.natural_period_s[0] / std::sqrt(1.0 - zeta * zeta), 0.05);
 }
 
 TEST(AttitudeRestoring, OffByDefaultAndPerAxis) {
@@ -102,7 +102,7 @@ TEST(AttitudeRestoring, OffByDefaultAndPerAxis) {
   EXPECT_EQ(random_walk[kQ], -0.03);
 
   ConstantVelocityOptions roll_only = restoring_options();
-  roll_only.attitude_restoring.period_s[1] = 0.0;  // pitch rate stays a random walk
+  roll_only.attitude_restoring.natural_period_s[1] = 0.0;  // pitch rate stays a random walk
   const Vec12 y = ConstantVelocityModel(roll_only).predict(x, 0.1);
   EXPECT_LT(y[kP], 0.02);  // pulled back towards the roll trim
   EXPECT_EQ(y[kQ], -0.03);
@@ -111,10 +111,10 @@ TEST(AttitudeRestoring, OffByDefaultAndPerAxis) {
 TEST(AttitudeRestoring, OptionsValidate) {
   ConstantVelocityOptions o = restoring_options();
   EXPECT_TRUE(o.validate().ok());
-  o.attitude_restoring.period_s[1] = -1.0;
+  o.attitude_restoring.natural_period_s[1] = -1.0;
   Status s = o.validate();
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(s.message().find("attitude_restoring.period_s[1] = -1"), std::string::npos)
+  EXPECT_NE(s.message().find("attitude_restoring.natural_period_s[1] = -1"), std::string::npos)
       << s.message();
   EXPECT_THROW(ConstantVelocityModel{o}, std::invalid_argument);
   o = restoring_options();

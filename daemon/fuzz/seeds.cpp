@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
   const std::filesystem::path dir = std::filesystem::path(argv[1]) / "checkpoint";
   std::filesystem::create_directories(dir);
   const nav::daemon::NavdConfig config =
-      nav::daemon::load_config_file(NAV_SOURCE_DIR "/config/sim.yaml");
+      nav::testing::synthetic_dive_config(NAV_SOURCE_DIR "/config/sim.yaml");
   nav::testing::SyntheticDiveOptions o;
   o.duration_s = 10.0;
   const nav::testing::SyntheticDive dive = nav::testing::make_synthetic_dive(config, o);

@@ -340,7 +340,7 @@ TEST_F(CheckpointResume, PayloadThatDoesNotDecodeIsSkippedWithItsReason) {
 
 struct FilterDive {
   FilterDive() {
-    config = load_config_file("config/sim.yaml");  // ctest runs in the source directory
+    config = nav::testing::synthetic_dive_config();  // ctest runs in the source directory
     nav::testing::SyntheticDiveOptions o;
     o.duration_s = 120.0;
     dive = nav::testing::make_synthetic_dive(config, o);

@@ -78,7 +78,7 @@ TEST(Config, SimYamlLoads) {
   EXPECT_DOUBLE_EQ(c.filter.process_noise.accel_psd[2], 2e-2);
   EXPECT_DOUBLE_EQ(c.filter.process_noise.angular_accel_psd[2], 6e-4);
   EXPECT_TRUE(c.filter.process_noise.validate().ok());
-  EXPECT_DOUBLE_EQ(c.filter.process_noise.attitude_restoring.period_s[1], 9.0);
+  EXPECT_DOUBLE_EQ(c.filter.process_noise.attitude_restoring.natural_period_s[1], 9.0);
   // Latencies the survey simulator applies (config/README.md).
   EXPECT_DOUBLE_EQ(c.sensors[0].latency_s, 0.1);
   EXPECT_DOUBLE_EQ(c.sensors[1].latency_s, 0.02);
@@ -257,18 +257,20 @@ sensors:
 TEST(Config, AttitudeRestoringKeys) {
   NavdConfig c = parse_config(kMinimal);
   EXPECT_FALSE(c.filter.process_noise.attitude_restoring.enabled());  // random walks by default
-  c = parse_config(std::string(kMinimal) +
-                   "filter: {attitude_restoring: {period_s: [7.3, 9], damping_ratio: [0.2, 0.1], "
-                   "trim_deg: [0, 1.5], pitch_per_heave_deg_per_mps: -6}}\n");
+  c = parse_config(
+      std::string(kMinimal) +
+      "filter: {attitude_restoring: {natural_period_s: [7.3, 9], damping_ratio: [0.2, 0.1], "
+      "trim_deg: [0, 1.5], pitch_per_heave_deg_per_mps: -6}}\n");
   const core::AttitudeRestoringOptions& a = c.filter.process_noise.attitude_restoring;
-  EXPECT_DOUBLE_EQ(a.period_s[0], 7.3);
+  EXPECT_DOUBLE_EQ(a.natural_period_s[0], 7.3);
   EXPECT_DOUBLE_EQ(a.damping_ratio[1], 0.1);
   EXPECT_DOUBLE_EQ(a.trim_rad[1], 1.5 * std::numbers::pi / 180.0);
   EXPECT_DOUBLE_EQ(a.pitch_per_heave_rad_per_mps, -6.0 * std::numbers::pi / 180.0);
   ConfigError e = expect_error(std::string(kMinimal) +
-                               "filter: {attitude_restoring: {period_s: [7.3, -1]}}\n");
-  EXPECT_EQ(e.key_path(), "filter.attitude_restoring.period_s[1]");
-  e = expect_error(std::string(kMinimal) + "filter: {attitude_restoring: {period_s: [7.3]}}\n");
+                               "filter: {attitude_restoring: {natural_period_s: [7.3, -1]}}\n");
+  EXPECT_EQ(e.key_path(), "filter.attitude_restoring.natural_period_s[1]");
+  e = expect_error(std::string(kMinimal) +
+                   "filter: {attitude_restoring: {natural_period_s: [7.3]}}\n");
   EXPECT_NE(e.reason().find("expected 2 numbers [roll, pitch], got 1"), std::string::npos);
   e = expect_error(std::string(kMinimal) + "filter: {attitude_restoring: {periods: [1, 1]}}\n");
   EXPECT_EQ(e.key_path(), "filter.attitude_restoring.periods");

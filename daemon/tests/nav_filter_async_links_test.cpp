@@ -20,7 +20,7 @@ namespace {
 
 using nav::testing::SyntheticDive;
 
-NavdConfig sim_config() { return load_config_file("config/sim.yaml"); }
+NavdConfig sim_config() { return nav::testing::synthetic_dive_config(); }
 
 /// The dive with receive times: host_realtime_us = validity_us + 5e12 (another clock).
 constexpr std::int64_t kRealtimeOffsetUs = 5'000'000'000'000;

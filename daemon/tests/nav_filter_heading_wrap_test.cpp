@@ -28,7 +28,7 @@ struct WrapRun {
 };
 
 WrapRun run(const nav::testing::SyntheticDiveOptions& o, bool links) {
-  const NavdConfig config = load_config_file("config/sim.yaml");  // ctest: source directory
+  const NavdConfig config = nav::testing::synthetic_dive_config();  // ctest: source directory
   const nav::testing::SyntheticDive dive = nav::testing::make_synthetic_dive(config, o);
   NavFilterOptions options = filter_options_from_config(config);
   options.propose_links = links;

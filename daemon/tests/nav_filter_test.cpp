@@ -18,7 +18,7 @@ namespace nav::daemon {
 namespace {
 
 NavdConfig sim_config() {
-  return load_config_file("config/sim.yaml");  // ctest runs in the source directory
+  return nav::testing::synthetic_dive_config();  // ctest runs in the source directory
 }
 
 struct DiveRun {

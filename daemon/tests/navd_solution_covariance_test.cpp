@@ -30,7 +30,7 @@ constexpr double kDeg = M_PI / 180.0;
 
 daemon::NavdConfig memq_sim_config() {
   daemon::NavdConfig config =
-      daemon::load_config_file(std::string(NAV_SOURCE_DIR) + "/config/sim.yaml");
+      nav::testing::synthetic_dive_config(std::string(NAV_SOURCE_DIR) + "/config/sim.yaml");
   config.lcm.url = "memq://";
   return config;
 }

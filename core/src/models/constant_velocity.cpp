@@ -40,8 +40,8 @@ Status check_restoring(const AttitudeRestoringOptions& o) {
     return Status::Error(StatusCode::kInvalidArgument, msg.str());
   };
   for (int k = 0; k < 2; ++k) {
-    if (!std::isfinite(o.period_s[k]) || o.period_s[k] < 0.0)
-      return bad("period_s", k, o.period_s[k], "finite and >= 0");
+    if (!std::isfinite(o.natural_period_s[k]) || o.natural_period_s[k] < 0.0)
+      return bad("natural_period_s", k, o.natural_period_s[k], "finite and >= 0");
     if (!std::isfinite(o.damping_ratio[k]) || o.damping_ratio[k] < 0.0)
       return bad("damping_ratio", k, o.damping_ratio[k], "finite and >= 0");
     if (!std::isfinite(o.trim_rad[k])) return bad("trim_rad", k, o.trim_rad[k], "finite");
@@ -57,8 +57,8 @@ struct Oscillator {
 };
 
 Oscillator oscillator(const AttitudeRestoringOptions& o, int axis) {
-  if (!(o.period_s[axis] > 0.0)) return {};
-  const double omega = 2.0 * std::numbers::pi / o.period_s[axis];
+  if (!(o.natural_period_s[axis] > 0.0)) return {};
+  const double omega = 2.0 * std::numbers::pi / o.natural_period_s[axis];
   return {omega * omega, 2.0 * o.damping_ratio[axis] * omega};
 }
 

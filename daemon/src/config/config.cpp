@@ -50,10 +50,11 @@ Eigen::Vector2d read_pair(const YamlReader& r, double lo, double hi) {
 
 /// filter.attitude_restoring (core AttitudeRestoringOptions; angles in degrees here).
 core::AttitudeRestoringOptions parse_attitude_restoring(const YamlReader& a) {
-  a.expect_map({"period_s", "damping_ratio", "trim_deg", "pitch_per_heave_deg_per_mps"});
+  a.expect_map({"natural_period_s", "damping_ratio", "trim_deg", "pitch_per_heave_deg_per_mps"});
   constexpr double kRadPerDeg = std::numbers::pi / 180.0;
   core::AttitudeRestoringOptions o;
-  if (a.has("period_s")) o.period_s = read_pair(a.at("period_s"), 0.0, 3600.0);
+  if (a.has("natural_period_s"))
+    o.natural_period_s = read_pair(a.at("natural_period_s"), 0.0, 3600.0);
   if (a.has("damping_ratio")) o.damping_ratio = read_pair(a.at("damping_ratio"), 0.0, 100.0);
   if (a.has("trim_deg")) o.trim_rad = kRadPerDeg * read_pair(a.at("trim_deg"), -45.0, 45.0);
   double per_heave_deg = 0.0;
@@ -63,13 +64,13 @@ core::AttitudeRestoringOptions parse_attitude_restoring(const YamlReader& a) {
 }
 
 FilterConfig parse_filter(const YamlReader& f) {
-  f.expect_map({"process_noise_psd", "attitude_restoring", "cg_iterations_per_step", "latency_window_ms",
-                "gating_chi2_threshold", "recovery_thread", "recovery_handoff_s",
-                "recovery_preconditioner", "recovery_refresh_interval", "recovery_refresh_residual",
-                "registration_wait_s", "max_pending_registrations", "proposal_min_probability",
-                "proposal_min_overlap", "proposal_max_per_image", "dvl_gate_sigma",
-                "roll_pitch_gate_sigma", "heading_gate_sigma", "depth_gate_sigma",
-                "aid_gate_reset_s"});
+  f.expect_map({"process_noise_psd", "attitude_restoring", "cg_iterations_per_step",
+                "latency_window_ms", "gating_chi2_threshold", "recovery_thread",
+                "recovery_handoff_s", "recovery_preconditioner", "recovery_refresh_interval",
+                "recovery_refresh_residual", "registration_wait_s", "max_pending_registrations",
+                "proposal_min_probability", "proposal_min_overlap", "proposal_max_per_image",
+                "dvl_gate_sigma", "roll_pitch_gate_sigma", "heading_gate_sigma",
+                "depth_gate_sigma", "aid_gate_reset_s"});
   FilterConfig filter;
   if (f.has("process_noise_psd")) {
     const YamlReader p = f.at("process_noise_psd");

@@ -22,7 +22,7 @@ using Bytes = std::vector<std::uint8_t>;
 
 struct NavFilterFixture {
   explicit NavFilterFixture(double duration_s) {
-    config = daemon::load_config_file("config/sim.yaml");
+    config = synthetic_dive_config();
     SyntheticDiveOptions o;
     o.duration_s = duration_s;
     dive = make_synthetic_dive(config, o);

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <random>
 #include <set>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -49,6 +50,15 @@ struct SyntheticDive {
   int registrations_succeeded = 0;
   std::int64_t truth_origin_us = 0;  ///< monotonic time of truth time 0
 };
+
+/// config/sim.yaml for this vehicle. Its roll and pitch are constant, so the filter's roll and
+/// pitch rates stay random walks (sim.yaml's attitude_restoring describes the survey simulator's
+/// oscillating vehicle): the filter's model then holds exactly.
+inline daemon::NavdConfig synthetic_dive_config(const std::string& sim_yaml = "config/sim.yaml") {
+  daemon::NavdConfig config = daemon::load_config_file(sim_yaml);
+  config.filter.process_noise.attitude_restoring = {};
+  return config;
+}
 
 inline core::Vec12 synthetic_truth(const SyntheticDiveOptions& o, double t_s) {
   core::Vec12 x = core::Vec12::Zero();

@@ -32,7 +32,7 @@ namespace nav::core {
 /// (docs/consistency.md "Roll and pitch restoring").
 struct AttitudeRestoringOptions {
   /// Natural periods of roll and pitch, s; 0 leaves that rate a random walk. Finite, >= 0.
-  Eigen::Vector2d period_s = Eigen::Vector2d::Zero();
+  Eigen::Vector2d natural_period_s = Eigen::Vector2d::Zero();
   /// Damping ratios zeta of roll and pitch, dimensionless. Finite, >= 0.
   Eigen::Vector2d damping_ratio = Eigen::Vector2d::Zero();
   /// Equilibrium roll and pitch at rest (static trim), rad. Finite.
@@ -40,7 +40,7 @@ struct AttitudeRestoringOptions {
   /// Pitch equilibrium shift per body heave velocity w, rad per m/s (< 0: nose up climbing).
   double pitch_per_heave_rad_per_mps = 0.0;
 
-  bool enabled() const { return (period_s.array() > 0.0).any(); }
+  bool enabled() const { return (natural_period_s.array() > 0.0).any(); }
 };
 
 struct ConstantVelocityOptions {
