@@ -1,5 +1,5 @@
 // Tests of models/constant_velocity.h: hand-computed prediction, F against central
-// differences on 1,000 states, Q against an independent quadrature, and input errors.
+// differences on 1,000 states (with and without the attitude restoring terms), Q against an independent quadrature, and input errors.
 
 #include "nav/core/models/constant_velocity.h"
 
@@ -49,10 +49,10 @@ TEST(ConstantVelocity, YawRateTurnsHeadingAndWraps) {
   EXPECT_NEAR(model.predict(rolled, 1.0)[kPitch], 0.0, 1e-12);
 }
 
-TEST(ConstantVelocity, JacobianMatchesNumeric) {
-  std::mt19937_64 rng(31);
+/// F of predict() against central differences at 1,000 random states and steps.
+void expect_jacobian_matches_numeric(const ConstantVelocityModel& model, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> dt(0.01, 1.0);
-  const ConstantVelocityModel model;
   for (int i = 0; i < kSamples; ++i) {
     const Vec12 x = test::random_state(rng);
     const double dt_s = dt(rng);
@@ -66,6 +66,19 @@ TEST(ConstantVelocity, JacobianMatchesNumeric) {
         });
     ASSERT_LT(max_abs_diff(F, N), kJacobianTol) << "x " << x.transpose() << " dt " << dt_s;
   }
+}
+
+TEST(ConstantVelocity, JacobianMatchesNumeric) {
+  expect_jacobian_matches_numeric(ConstantVelocityModel(), 31);
+}
+
+TEST(ConstantVelocity, JacobianMatchesNumericWithAttitudeRestoring) {
+  ConstantVelocityOptions o;  // of the order identified on the simulated vehicle
+  o.attitude_restoring.natural_period_s << 7.3, 9.0;
+  o.attitude_restoring.damping_ratio << 0.17, 0.14;
+  o.attitude_restoring.trim_rad << 0.003, 0.02;
+  o.attitude_restoring.pitch_per_heave_rad_per_mps = -0.1;
+  expect_jacobian_matches_numeric(ConstantVelocityModel(o), 41);
 }
 
 TEST(ConstantVelocity, ProcessNoiseMatchesQuadratureAndIsPsd) {
