@@ -7,7 +7,8 @@
 //                     diag(accel_psd, angular_accel_psd).
 //   g = 0 (random-walk velocities) except, with AttitudeRestoringOptions, the roll and pitch
 //   rates of a passively stable vehicle, each a damped oscillator about its equilibrium
-//   (Fossen 2011, sec. 4.2, restoring moments; period T, damping ratio zeta, omega = 2 pi / T):
+//   (Fossen 2011, ch. 4, hydrostatic restoring moments; period T, damping ratio zeta,
+//   omega = 2 pi / T):
 //     dp/dt = -omega_r^2 (roll - trim_r) - 2 zeta_r omega_r p
 //     dq/dt = -omega_p^2 (pitch - trim_p - c w) - 2 zeta_p omega_p q     (c: pitch per heave)
 // Discretisation (first order, Euler):   x_k+1 = x_k + dt f(x_k), angles wrapped;
