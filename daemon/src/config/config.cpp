@@ -19,33 +19,28 @@ std::string error_text(const std::string& source, const std::string& key_path,
   return source + ": " + (key_path.empty() ? "<root>" : key_path) + ": " + reason;
 }
 
-core::Vec3 read_psd(const YamlReader& r) {
+/// N numbers, each in [lo, hi]; `names` (e.g. " [roll, pitch]") follows the count in the error.
+template <int N>
+Eigen::Matrix<double, N, 1> read_numbers(const YamlReader& r, double lo, double hi,
+                                         const std::string& names = "") {
   const std::vector<YamlReader> items = r.elements();
-  if (items.size() != 3) r.fail("expected 3 numbers, got " + std::to_string(items.size()));
-  core::Vec3 out;
-  for (int i = 0; i < 3; ++i) {
-    const double v = items[static_cast<std::size_t>(i)].as_double();
-    if (v < 0.0 || v > 1e3)
-      items[static_cast<std::size_t>(i)].fail(std::to_string(v) + " is not in [0, 1000]");
+  if (items.size() != N) {
+    r.fail("expected " + std::to_string(N) + " numbers" + names + ", got " +
+           std::to_string(items.size()));
+  }
+  Eigen::Matrix<double, N, 1> out;
+  for (int i = 0; i < N; ++i) {
+    const YamlReader& item = items[static_cast<std::size_t>(i)];
+    const double v = item.as_double();
+    if (v < lo || v > hi) item.fail(std::to_string(v) + " is not in " + detail::range_text(lo, hi));
     out[i] = v;
   }
   return out;
 }
 
-/// Two numbers, each in [lo, hi].
+/// Roll and pitch values, each in [lo, hi].
 Eigen::Vector2d read_pair(const YamlReader& r, double lo, double hi) {
-  const std::vector<YamlReader> items = r.elements();
-  if (items.size() != 2)
-    r.fail("expected 2 numbers [roll, pitch], got " + std::to_string(items.size()));
-  Eigen::Vector2d out;
-  for (int i = 0; i < 2; ++i) {
-    const double v = items[static_cast<std::size_t>(i)].as_double();
-    if (v < lo || v > hi)
-      items[static_cast<std::size_t>(i)].fail(std::to_string(v) + " is not in " +
-                                              detail::range_text(lo, hi));
-    out[i] = v;
-  }
-  return out;
+  return read_numbers<2>(r, lo, hi, " [roll, pitch]");
 }
 
 /// filter.attitude_restoring (core AttitudeRestoringOptions; angles in degrees here).
@@ -75,9 +70,12 @@ FilterConfig parse_filter(const YamlReader& f) {
   if (f.has("process_noise_psd")) {
     const YamlReader p = f.at("process_noise_psd");
     p.expect_map({"accel_m2ps3", "angular_accel_rad2ps3"});
-    if (p.has("accel_m2ps3")) filter.process_noise.accel_psd = read_psd(p.at("accel_m2ps3"));
+    if (p.has("accel_m2ps3")) {
+      filter.process_noise.accel_psd = read_numbers<3>(p.at("accel_m2ps3"), 0.0, 1e3);
+    }
     if (p.has("angular_accel_rad2ps3")) {
-      filter.process_noise.angular_accel_psd = read_psd(p.at("angular_accel_rad2ps3"));
+      filter.process_noise.angular_accel_psd =
+          read_numbers<3>(p.at("angular_accel_rad2ps3"), 0.0, 1e3);
     }
   }
   if (f.has("attitude_restoring")) {
