@@ -78,6 +78,44 @@ TEST(Pcg, BlockJacobiSolvesBlockDiagonalInOneIteration) {
   EXPECT_LT((X - A.ldlt().solve(B)).norm(), 1e-10 * X.norm());
 }
 
+/// Counts applications of a wrapped preconditioner (the cost of a step with a factor M).
+class CountingPreconditioner final : public Preconditioner {
+ public:
+  explicit CountingPreconditioner(const Preconditioner& m) : m_(m) {}
+  Eigen::Index dim() const override { return m_.dim(); }
+  void apply(const Eigen::Ref<const Eigen::MatrixXd>& R,
+             Eigen::Ref<Eigen::MatrixXd> Z) const override {
+    ++applications;
+    m_.apply(R, Z);
+  }
+  mutable int applications = 0;
+
+ private:
+  const Preconditioner& m_;
+};
+
+TEST(Pcg, KIterationsApplyThePreconditionerKTimes) {
+  // The initial residual's solve plus one per further direction: the direction after the last
+  // iteration is never used, so it must not cost a solve (with a kept factor, M = Λ, one
+  // iteration is one pair of triangular solves, not two). Same result either way.
+  const Eigen::MatrixXd A = random_block_spd(20, 3, 11);
+  const CsrMatrix csr = to_csr(A);
+  BlockJacobiPreconditioner jacobi;
+  ASSERT_TRUE(jacobi.factor(csr, 3).ok());
+  const Eigen::MatrixXd B = Eigen::MatrixXd::Random(60, 4);
+  for (const int k : {1, 2, 5}) {
+    CountingPreconditioner M(jacobi);
+    Eigen::MatrixXd X = Eigen::MatrixXd::Zero(60, 4);
+    PcgOptions options;
+    options.max_iterations = k;
+    PcgWorkspace ws;
+    const PcgSummary s = solve_pcg(CsrOperator(csr), M, B, X, options, ws);
+    ASSERT_TRUE(s.status.ok()) << s.status.to_string();
+    EXPECT_EQ(s.iterations, k);
+    EXPECT_EQ(M.applications, k) << k << " iterations";
+  }
+}
+
 TEST(Pcg, ConvergesToDenseSolutionAndReportsTrueResidual) {
   const Eigen::MatrixXd A = random_block_spd(30, 6, 7);
   const CsrMatrix csr = to_csr(A);

@@ -433,6 +433,8 @@ PcgSummary solve_pcg_packed(const PackedBlockOperator& A, const PackedBlockJacob
         --active_count;
       }
     }
+    // After the last iteration the next direction is never used: skip its preconditioner.
+    if (iteration + 1 >= options.max_iterations || active_count == 0) continue;
     M.apply(R, Z, width, rz_new);
     for (int c = 0; c < width; ++c) {
       beta[c] = 0.0;

@@ -210,6 +210,9 @@ PcgSummary solve_pcg(const SpdOperator& A, const Preconditioner& M,
         --active_count;
       }
     }
+    // After the last iteration the next direction is never used: skip its preconditioner
+    // solve (with a factor M, a full pair of triangular solves).
+    if (iteration + 1 >= options.max_iterations || active_count == 0) continue;
     M.apply(R, Z);
     for (Eigen::Index c = 0; c < m; ++c) {
       if (!active[static_cast<size_t>(c)]) continue;
