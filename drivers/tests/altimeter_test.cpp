@@ -75,6 +75,25 @@ TEST(Altimeter, ValeportVa500ManualExamples) {
   EXPECT_DOUBLE_EQ(*no_p.records[0].range_m, 12.5);
 }
 
+TEST(Altimeter, ValeportPressureNoSensorCanReadIsMalformed) {
+  // A pressure beyond the deepest ocean (here a run of digits a fuzzer found, 5.6e53 dbar) is
+  // corruption, not a reading: the sentence is dropped and counted, not passed on.
+  const auto format = format_of(AltimeterProtocol::kValeportNmea);
+  const Result corrupt =
+      decode(nmea_wrap("PRVAT,00.116,M," + std::string(54, '5') + ",dBar") +
+                 nmea_wrap("PRVAT,00.116,M,12000.5,dBar") + nmea_wrap("PRVAT,00.116,M,-20.5,dBar"),
+             format);
+  EXPECT_TRUE(corrupt.records.empty());
+  EXPECT_EQ(corrupt.stats.malformed, 3u);
+  // The extremes a sensor can report still decode: the deepest trench, a gauge reading in air.
+  const Result deep = decode(
+      nmea_wrap("PRVAT,10.000,M,11000.000,dBar") + nmea_wrap("PRVAT,10.000,M,-0.100,dBar"),
+      format);
+  ASSERT_EQ(deep.records.size(), 2u);
+  EXPECT_NEAR(*deep.records[0].pressure_pa, 1.1e8, 1e-3);
+  EXPECT_NEAR(*deep.records[1].pressure_pa, -1.0e3, 1e-6);
+}
+
 TEST(Altimeter, NmeaDbtManualExampleAndFallbackUnits) {
   const auto format = format_of(AltimeterProtocol::kNmeaDbt);
   // VA500 manual section 4.2 example.

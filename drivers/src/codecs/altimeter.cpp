@@ -14,6 +14,10 @@ namespace {
 constexpr double kMetresPerFoot = 0.3048;
 constexpr double kMetresPerFathom = 1.8288;
 constexpr double kPascalPerDbar = 1.0e4;
+// A $PRVAT pressure outside this is no reading of a sea-water pressure sensor (the deepest ocean
+// is ~11,000 dbar; gauge readings in air are near 0): the sentence is corrupt.
+constexpr double kMinPlausibleDbar = -20.0;
+constexpr double kMaxPlausibleDbar = 12000.0;
 
 bool is_nmea(AltimeterProtocol protocol) {
   return protocol == AltimeterProtocol::kValeportNmea || protocol == AltimeterProtocol::kNmeaDbt;
@@ -115,7 +119,8 @@ struct AltimeterDecoder::Impl {
       std::optional<double> pressure_pa;
       if (!f[3].empty()) {
         const auto dbar = ascii::parse_decimal(f[3]);
-        if (!dbar || (f[4] != "dBar" && f[4] != "dbar")) {
+        if (!dbar || !(*dbar >= kMinPlausibleDbar && *dbar <= kMaxPlausibleDbar) ||
+            (f[4] != "dBar" && f[4] != "dbar")) {
           ++stats.malformed;
           return false;
         }

@@ -3,7 +3,8 @@
 // * kTritechPa500: "ddd.ddm<CR><LF>" (Tritech PA500 and the many altimeters emulating it),
 //   range in metres with a trailing 'm'.
 // * kValeportNmea: Valeport VA500 "$PRVAT,xx.xxx,M,xxxx.xxx,dBar*hh" (VA500 manual section
-//   4.1): range (m) and, with the optional pressure sensor, pressure (dbar).
+//   4.1): range (m) and, with the optional pressure sensor, pressure (dbar). A pressure
+//   outside [-20, 12000] dbar (beyond the deepest ocean) makes the sentence malformed.
 // * kImpactSubseaIsa500: ISA500 ASCII string, default "ddd.ddd m" or a user-defined string
 //   with a fixed prefix and suffix around the number (AltimeterFormat::prefix / suffix).
 // * kNmeaDbt: NMEA 0183 "$--DBT,x.x,f,x.x,M,x.x,F*hh" depth below transducer (any talker; the
