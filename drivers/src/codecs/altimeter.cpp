@@ -119,7 +119,7 @@ struct AltimeterDecoder::Impl {
       std::optional<double> pressure_pa;
       if (!f[3].empty()) {
         const auto dbar = ascii::parse_decimal(f[3]);
-        if (!dbar || !(*dbar >= kMinPlausibleDbar && *dbar <= kMaxPlausibleDbar) ||
+        if (!dbar || !ascii::in_range(*dbar, kMinPlausibleDbar, kMaxPlausibleDbar) ||
             (f[4] != "dBar" && f[4] != "dbar")) {
           ++stats.malformed;
           return false;

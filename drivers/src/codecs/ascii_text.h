@@ -25,6 +25,7 @@ namespace nav::drivers::ascii {
 std::optional<double> parse_decimal(std::string_view text);
 /// 1..8 hexadecimal digits (either case) -> value.
 std::optional<uint32_t> parse_hex32(std::string_view text);
+inline bool in_range(double v, double lo, double hi) { return v >= lo && v <= hi; }  ///< NaN: no
 /// Removes leading and trailing spaces and tabs.
 std::string_view trim(std::string_view text);
 /// Fixed-point text of `value` with `decimals` digits after the point (locale-free).

@@ -53,7 +53,7 @@ bool numbers(const ascii::Fields& f, std::size_t first, std::array<double, N>& v
   return true;
 }
 
-bool in_range(double v, double lo, double hi) { return v >= lo && v <= hi; }
+using ascii::in_range;
 
 Parsed parse_hdt(const ascii::Fields& f, std::string_view address) {
   // NMEA 0183 HDT: heading degrees true, 'T'.
