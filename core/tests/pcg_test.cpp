@@ -1,5 +1,5 @@
-// Multi-RHS block-Jacobi PCG (recovery/pcg.h): hand-checkable systems first, then random
-// block-sparse SPD matrices against dense solves.
+// Multi-RHS block-Jacobi PCG and iterative refinement (recovery/pcg.h): hand-checkable systems
+// first, then random block-sparse SPD matrices against dense solves.
 #include "nav/core/recovery/pcg.h"
 
 #include <gtest/gtest.h>
@@ -93,6 +93,112 @@ class CountingPreconditioner final : public Preconditioner {
  private:
   const Preconditioner& m_;
 };
+
+/// M⁻¹ = scale · A⁻¹ from a dense factor: scale 1 is a factor of A itself (the kept factor);
+/// another scale is a factor of A / scale.
+class ScaledInversePreconditioner final : public Preconditioner {
+ public:
+  ScaledInversePreconditioner(const Eigen::MatrixXd& A, double scale) : ldlt_(A), scale_(scale) {}
+  Eigen::Index dim() const override { return ldlt_.rows(); }
+  void apply(const Eigen::Ref<const Eigen::MatrixXd>& R,
+             Eigen::Ref<Eigen::MatrixXd> Z) const override {
+    Z = scale_ * ldlt_.solve(R);
+  }
+
+ private:
+  Eigen::LDLT<Eigen::MatrixXd> ldlt_;
+  double scale_;
+};
+
+/// Counts the products of a wrapped operator.
+class CountingOperator final : public SpdOperator {
+ public:
+  explicit CountingOperator(const SpdOperator& a) : a_(a) {}
+  Eigen::Index dim() const override { return a_.dim(); }
+  void multiply(const Eigen::Ref<const Eigen::MatrixXd>& X,
+                Eigen::Ref<Eigen::MatrixXd> Y) const override {
+    ++products;
+    a_.multiply(X, Y);
+  }
+  mutable int products = 0;
+
+ private:
+  const SpdOperator& a_;
+};
+
+TEST(Refinement, WithAFactorOfATakesTheDirectSolveInOneIterationAndTwoProducts) {
+  const Eigen::MatrixXd A = random_block_spd(20, 6, 11);
+  const CsrMatrix csr = to_csr(A);
+  const Eigen::MatrixXd B = Eigen::MatrixXd::Random(120, 7);
+  const Eigen::MatrixXd exact = A.ldlt().solve(B);
+  const Eigen::MatrixXd warm = exact + 0.1 * Eigen::MatrixXd::Random(120, 7);
+  PcgOptions options;
+  options.max_iterations = 1;
+  const ScaledInversePreconditioner factor(A, 1.0);
+  CountingPreconditioner M(factor);
+  const CsrOperator csr_operator(csr);
+  CountingOperator op(csr_operator);
+  Eigen::MatrixXd X = warm;
+  PcgWorkspace ws;
+  const PcgSummary s = solve_refinement(op, M, B, X, options, ws);
+  ASSERT_TRUE(s.status.ok()) << s.status.to_string();
+  EXPECT_EQ(s.iterations, 1);
+  EXPECT_EQ(M.applications, 1);
+  EXPECT_EQ(op.products, 2);  // the warm start's residual and the true residual at the end
+  EXPECT_LT((X - exact).norm() / exact.norm(), 1e-10);
+  const Eigen::VectorXd true_residual = (B - A * X).colwise().norm().transpose();
+  for (int c = 0; c < 7; ++c) {
+    EXPECT_NEAR(s.residual_norm[c], true_residual[c], 1e-13 * B.col(c).norm());
+  }
+
+  // PCG takes the same step at one product more.
+  Eigen::MatrixXd X_pcg = warm;
+  CountingOperator op_pcg(csr_operator);
+  ASSERT_TRUE(solve_pcg(op_pcg, factor, B, X_pcg, options, ws).status.ok());
+  EXPECT_EQ(op_pcg.products, 3);
+  EXPECT_LT((X_pcg - X).norm() / exact.norm(), 1e-10);
+}
+
+TEST(Refinement, ANearFactorConvergesToTheTolerance) {
+  const Eigen::MatrixXd A = random_block_spd(20, 6, 12);
+  const CsrMatrix csr = to_csr(A);
+  const Eigen::MatrixXd B = Eigen::MatrixXd::Random(120, 3);
+  // M = A / 0.8: the error contracts by |1 - 0.8| = 0.2 per iteration.
+  const ScaledInversePreconditioner M(A, 0.8);
+  Eigen::MatrixXd X = Eigen::MatrixXd::Zero(120, 3);
+  PcgOptions options;
+  options.max_iterations = 100;
+  options.relative_tolerance = 1e-10;
+  PcgWorkspace ws;
+  const PcgSummary s = solve_refinement(CsrOperator(csr), M, B, X, options, ws);
+  ASSERT_TRUE(s.status.ok());
+  EXPECT_TRUE(s.converged);
+  EXPECT_GE(s.iterations, 10);  // 0.2^k ‖e0‖ in the A-norm: no shortcut
+  EXPECT_LE(s.iterations, 25);
+  EXPECT_LT((B - A * X).norm() / B.norm(), 1e-9);
+}
+
+TEST(Refinement, AStepThatWouldRaiseTheErrorIsNotTaken) {
+  const Eigen::MatrixXd A = random_block_spd(20, 6, 13);
+  const CsrMatrix csr = to_csr(A);
+  const Eigen::MatrixXd B = Eigen::MatrixXd::Random(120, 2);
+  const Eigen::MatrixXd exact = A.ldlt().solve(B);
+  const Eigen::MatrixXd warm = exact + 0.01 * Eigen::MatrixXd::Random(120, 2);
+  // M = A / 3: the step overshoots, e1 = -2 e0, four times the A-norm error.
+  const ScaledInversePreconditioner M(A, 3.0);
+  Eigen::MatrixXd X = warm;
+  PcgOptions options;
+  options.max_iterations = 5;
+  PcgWorkspace ws;
+  const PcgSummary s = solve_refinement(CsrOperator(csr), M, B, X, options, ws);
+  ASSERT_TRUE(s.status.ok());
+  EXPECT_EQ(s.iterations, 1);  // every column stopped at its first step
+  EXPECT_TRUE(X == warm);      // bit for bit
+  const Eigen::VectorXd true_residual = (B - A * warm).colwise().norm().transpose();
+  for (int c = 0; c < 2; ++c) {
+    EXPECT_NEAR(s.residual_norm[c], true_residual[c], 1e-13 * B.col(c).norm());
+  }
+}
 
 TEST(Pcg, ConvergesToDenseSolutionAndReportsTrueResidual) {
   const Eigen::MatrixXd A = random_block_spd(30, 6, 7);

@@ -22,6 +22,49 @@ Eigen::Block<Eigen::MatrixXd> scratch(Eigen::MatrixXd& m, Eigen::Index rows, Eig
 
 double relative(double residual, double rhs) { return rhs > 0.0 ? residual / rhs : residual; }
 
+Status check_sizes(const char* where, const SpdOperator& A, const Preconditioner& M,
+                   const Eigen::Ref<const Eigen::MatrixXd>& B,
+                   const Eigen::Ref<const Eigen::MatrixXd>& X) {
+  const Eigen::Index n = A.dim();
+  if (M.dim() == n && B.rows() == n && X.rows() == n && X.cols() == B.cols() && B.cols() >= 1) {
+    return Status::Ok();
+  }
+  return Status::Error(StatusCode::kInvalidArgument,
+                       std::string(where) + ": sizes disagree (operator " + std::to_string(n) +
+                           ", preconditioner " + std::to_string(M.dim()) + ", B " +
+                           std::to_string(B.rows()) + "x" + std::to_string(B.cols()) + ", X " +
+                           std::to_string(X.rows()) + "x" + std::to_string(X.cols()) + ")");
+}
+
+/// Restarts from zero (X = 0, R = B) every column whose warm start is further from the solution
+/// than zero in the A-norm (PcgOptions::restart_worse_than_zero); AX = A X. Returns the count.
+int restart_worse_than_zero(const Eigen::Ref<const Eigen::MatrixXd>& B,
+                            const Eigen::Ref<const Eigen::MatrixXd>& AX,
+                            Eigen::Ref<Eigen::MatrixXd> X, Eigen::Ref<Eigen::MatrixXd> R) {
+  int restarted = 0;
+  for (Eigen::Index c = 0; c < B.cols(); ++c) {
+    if (X.col(c).dot(AX.col(c)) - 2.0 * B.col(c).dot(X.col(c)) > 0.0) {
+      X.col(c).setZero();
+      R.col(c) = B.col(c);
+      ++restarted;
+    }
+  }
+  return restarted;
+}
+
+/// The summary's residuals from the residual R at exit.
+void finish_summary(const Eigen::Ref<const Eigen::MatrixXd>& R, const Eigen::VectorXd& rhs_norm,
+                    const PcgOptions& options, PcgSummary& summary) {
+  summary.residual_norm = R.colwise().norm().transpose();
+  summary.relative_residual.resize(R.cols());
+  for (Eigen::Index c = 0; c < R.cols(); ++c) {
+    summary.relative_residual[c] = relative(summary.residual_norm[c], rhs_norm[c]);
+  }
+  summary.max_relative_residual = summary.relative_residual.maxCoeff();
+  summary.converged = options.relative_tolerance > 0.0 &&
+                      summary.max_relative_residual <= options.relative_tolerance;
+}
+
 }  // namespace
 
 void CsrOperator::multiply(const Eigen::Ref<const Eigen::MatrixXd>& X,
@@ -138,17 +181,10 @@ PcgSummary solve_pcg(const SpdOperator& A, const Preconditioner& M,
   PcgSummary summary;
   summary.status = options.validate();
   if (!summary.status.ok()) return summary;
+  summary.status = check_sizes("solve_pcg", A, M, B, X);
+  if (!summary.status.ok()) return summary;
   const Eigen::Index n = A.dim();
   const Eigen::Index m = B.cols();
-  if (M.dim() != n || B.rows() != n || X.rows() != n || X.cols() != m || m < 1) {
-    summary.status = Status::Error(
-        StatusCode::kInvalidArgument,
-        "solve_pcg: sizes disagree (operator " + std::to_string(n) + ", preconditioner " +
-            std::to_string(M.dim()) + ", B " + std::to_string(B.rows()) + "x" +
-            std::to_string(m) + ", X " + std::to_string(X.rows()) + "x" +
-            std::to_string(X.cols()) + ")");
-    return summary;
-  }
   auto R = scratch(workspace.R, n, m);
   auto Z = scratch(workspace.Z, n, m);
   auto P = scratch(workspace.P, n, m);
@@ -158,16 +194,8 @@ PcgSummary solve_pcg(const SpdOperator& A, const Preconditioner& M,
   A.multiply(X, Q);
   R = B - Q;
   const Eigen::VectorXd rhs_norm = B.colwise().norm().transpose();
-  if (options.restart_worse_than_zero) {
-    for (Eigen::Index c = 0; c < m; ++c) {
-      // Q = A X here: energy of the warm start relative to zero (see PcgOptions).
-      if (X.col(c).dot(Q.col(c)) - 2.0 * B.col(c).dot(X.col(c)) > 0.0) {
-        X.col(c).setZero();
-        R.col(c) = B.col(c);
-        ++summary.restarted_columns;
-      }
-    }
-  }
+  if (options.restart_worse_than_zero)
+    summary.restarted_columns = restart_worse_than_zero(B, Q, X, R);
   M.apply(R, Z);
   P = Z;
 
@@ -228,14 +256,68 @@ PcgSummary solve_pcg(const SpdOperator& A, const Preconditioner& M,
     A.multiply(X, Q);
     R = B - Q;
   }
-  summary.residual_norm = R.colwise().norm().transpose();
-  summary.relative_residual.resize(m);
-  for (Eigen::Index c = 0; c < m; ++c) {
-    summary.relative_residual[c] = relative(summary.residual_norm[c], rhs_norm[c]);
+  finish_summary(R, rhs_norm, options, summary);
+  return summary;
+}
+
+PcgSummary solve_refinement(const SpdOperator& A, const Preconditioner& M,
+                            const Eigen::Ref<const Eigen::MatrixXd>& B,
+                            Eigen::Ref<Eigen::MatrixXd> X, const PcgOptions& options,
+                            PcgWorkspace& workspace) {
+  PcgSummary summary;
+  summary.status = options.validate();
+  if (summary.status.ok()) summary.status = check_sizes("solve_refinement", A, M, B, X);
+  if (!summary.status.ok()) return summary;
+  const Eigen::Index n = A.dim();
+  const Eigen::Index m = B.cols();
+  auto R = scratch(workspace.R, n, m);  // true residual B - A X
+  auto Z = scratch(workspace.Z, n, m);  // the step M⁻¹ R
+  auto R_before = scratch(workspace.P, n, m);
+  auto X_before = scratch(workspace.Q, n, m);
+
+  A.multiply(X, X_before);  // A X, before it holds X
+  R = B - X_before;
+  if (options.restart_worse_than_zero) {
+    summary.restarted_columns = restart_worse_than_zero(B, X_before, X, R);
   }
-  summary.max_relative_residual = summary.relative_residual.maxCoeff();
-  summary.converged = options.relative_tolerance > 0.0 &&
-                      summary.max_relative_residual <= options.relative_tolerance;
+  const Eigen::VectorXd rhs_norm = B.colwise().norm().transpose();
+  std::vector<bool> active(static_cast<size_t>(m));
+  int active_count = 0;
+  for (Eigen::Index c = 0; c < m; ++c) {
+    active[static_cast<size_t>(c)] = !(options.relative_tolerance > 0.0 &&
+                                       R.col(c).norm() <= options.relative_tolerance * rhs_norm[c]);
+    active_count += active[static_cast<size_t>(c)] ? 1 : 0;
+  }
+  int iteration = 0;
+  for (; iteration < options.max_iterations && active_count > 0; ++iteration) {
+    M.apply(R, Z);
+    for (Eigen::Index c = 0; c < m; ++c) {
+      if (!active[static_cast<size_t>(c)]) Z.col(c).setZero();
+    }
+    R_before = R;
+    X_before = X;
+    X += Z;
+    A.multiply(X, R);
+    R = B - R;
+    for (Eigen::Index c = 0; c < m; ++c) {
+      if (!active[static_cast<size_t>(c)]) continue;
+      // A z = R_before - R: the step's change of the A-norm error is zᵀAz - 2 zᵀr_before.
+      const double z_r = Z.col(c).dot(R_before.col(c));
+      const double z_a_z = Z.col(c).dot(R_before.col(c) - R.col(c));
+      const bool worse = z_a_z > 2.0 * z_r;
+      if (worse) {
+        X.col(c) = X_before.col(c);
+        R.col(c) = R_before.col(c);
+      }
+      if (worse || (options.relative_tolerance > 0.0 &&
+                    R.col(c).norm() <= options.relative_tolerance * rhs_norm[c])) {
+        active[static_cast<size_t>(c)] = false;
+        --active_count;
+      }
+    }
+  }
+  summary.iterations = iteration;
+  finish_summary(R, rhs_norm, options, summary);
   return summary;
 }
 

@@ -243,7 +243,8 @@ void StateRecovery::note_convergence(RecoveryResult& result, const PcgSummary& s
 }
 
 RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Preconditioner& M,
-                                         const Eigen::VectorXd& eta, int iteration_cap) {
+                                         const Eigen::VectorXd& eta, int iteration_cap,
+                                         bool m_equals_a) {
   RecoveryResult result;
   result.mode = options_.mode;
   result.refactored_blocks = preconditioner_.num_blocks();
@@ -252,7 +253,8 @@ RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Preconditio
   if (iteration_cap >= 0 && options_.mode == RecoveryMode::kFixedIterations) {
     pcg.max_iterations = std::min(pcg.max_iterations, iteration_cap);
   }
-  const PcgSummary summary = solve_pcg(A, M, rhs_, solution_, pcg, workspace_);
+  const PcgSummary summary = m_equals_a ? solve_refinement(A, M, rhs_, solution_, pcg, workspace_)
+                                        : solve_pcg(A, M, rhs_, solution_, pcg, workspace_);
   result.status = summary.status;
   result.iterations = summary.iterations;
   if (summary.residual_norm.size() == rhs_.cols()) {
@@ -294,10 +296,10 @@ RecoveryResult StateRecovery::solve_factor(const InformationMatrix& lambda,
   const int cap = refresh || kept ? options_.iterations_after_refresh : -1;
   if (options_.kernel == RecoveryKernel::kPacked) {
     packed_operator_.refresh(lambda);
-    result = solve_with(PackedSpdOperator(packed_operator_, packed_rhs_, packed_solution_), M,
-                        eta, cap);
+    result = solve_with(PackedSpdOperator(packed_operator_, packed_rhs_, packed_solution_), M, eta,
+                        cap, kept);
   } else {
-    result = solve_with(InformationOperator(lambda), M, eta, cap);
+    result = solve_with(InformationOperator(lambda), M, eta, cap, kept);
   }
   const KeptFactorUpdate& u = kept_.last_update();
   result.refactored_blocks =

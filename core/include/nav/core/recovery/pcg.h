@@ -149,4 +149,16 @@ PcgSummary solve_pcg(const SpdOperator& A, const Preconditioner& M,
                      const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::Ref<Eigen::MatrixXd> X,
                      const PcgOptions& options, PcgWorkspace& workspace);
 
+/// Solves A X = B by iterative refinement with M a factor of A (Wilkinson 1963; Higham,
+/// "Accuracy and Stability of Numerical Algorithms", 2nd ed., ch. 12): per iteration
+/// X += M⁻¹(B − A X), then the true residual by one product. With M = A this is the step a PCG
+/// iteration takes (its α = rᵀz / zᵀAz is 1), at one product less. A column whose step would
+/// raise its A-norm error (zᵀAz > 2 zᵀr, with Az = R_before − R_after: M far from A) keeps its
+/// iterate and stops; the residual reported then tells the caller to refactor. Same options
+/// (restart_worse_than_zero too) and summary as solve_pcg; the residual is always the true one.
+PcgSummary solve_refinement(const SpdOperator& A, const Preconditioner& M,
+                            const Eigen::Ref<const Eigen::MatrixXd>& B,
+                            Eigen::Ref<Eigen::MatrixXd> X, const PcgOptions& options,
+                            PcgWorkspace& workspace);
+
 }  // namespace nav::core

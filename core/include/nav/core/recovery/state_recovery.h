@@ -91,8 +91,11 @@ class StateRecovery {
 
  private:
   /// `iteration_cap` >= 0 lowers the fixed-iteration budget of this solve (-1: none).
+  /// `m_equals_a`: M is a factor of A itself (the kept factor): iterative refinement, which
+  /// takes PCG's step at one product less (pcg.h solve_refinement).
   RecoveryResult solve_with(const SpdOperator& A, const Preconditioner& M,
-                            const Eigen::VectorXd& eta, int iteration_cap = -1);
+                            const Eigen::VectorXd& eta, int iteration_cap = -1,
+                            bool m_equals_a = false);
   RecoveryResult solve_factor(const InformationMatrix& lambda, const Eigen::VectorXd& eta);
   /// kFactor with keep_factor_equal: brings kept_ to Λ (refactoring when it must).
   Status update_kept(const InformationMatrix& lambda, bool refactor);
