@@ -1,7 +1,8 @@
 #pragma once
 // A sparse LDLᵀ factor of the filter's Λ kept equal to Λ from one recovery step to the next by
 // modifying it instead of refactoring: the factor preconditioner's kept-equal mode
-// (factor_preconditioner.h). With M = Λ one PCG iteration is the direct solve.
+// (factor_preconditioner.h). With M = Λ one step of iterative refinement (pcg.h
+// solve_refinement) is the direct solve.
 //
 // Method: Davis & Hager, "Modifying a sparse Cholesky factorization" (SIMAX 20(3), 1999) and
 // "Row modifications of a sparse Cholesky factorization" (SIMAX 26(3), 2005), as CHOLMOD's

@@ -68,8 +68,9 @@ struct StateRecoveryOptions {
   int iterations_after_refresh = 1;
   /// kFactor: precondition with a factor kept equal to Λ (kept_equal_factor.h: modified at
   /// every solve, refactored when its `kept_factor_spare_blocks` (>= 1) reserved slots run out
-  /// or the residual exceeds refresh_residual), capped at iterations_after_refresh per solve;
-  /// the refresh above then only renews the exact marginals. false: blkdiag(P Λ₀ Pᵀ, Λ_TT).
+  /// or the residual exceeds refresh_residual) and solved by iterative refinement instead of
+  /// PCG (pcg.h solve_refinement), capped at iterations_after_refresh per solve; the refresh
+  /// above then only renews the exact marginals. false: blkdiag(P Λ₀ Pᵀ, Λ_TT).
   bool keep_factor_equal = false;
   int kept_factor_spare_blocks = 64;
   Status validate() const;
