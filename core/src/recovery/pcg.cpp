@@ -52,6 +52,11 @@ int restart_worse_than_zero(const Eigen::Ref<const Eigen::MatrixXd>& B,
   return restarted;
 }
 
+/// A column is done when its residual norm meets the relative tolerance (never when it is 0).
+bool meets_tolerance(const PcgOptions& options, double residual_norm, double rhs_norm) {
+  return options.relative_tolerance > 0.0 && residual_norm <= options.relative_tolerance * rhs_norm;
+}
+
 /// The summary's residuals from the residual R at exit.
 void finish_summary(const Eigen::Ref<const Eigen::MatrixXd>& R, const Eigen::VectorXd& rhs_norm,
                     const PcgOptions& options, PcgSummary& summary) {
@@ -202,8 +207,7 @@ PcgSummary solve_pcg(const SpdOperator& A, const Preconditioner& M,
   Eigen::VectorXd rz = (R.cwiseProduct(Z)).colwise().sum().transpose();
   std::vector<bool> active(static_cast<size_t>(m), true);
   auto column_done = [&](Eigen::Index c) {
-    return options.relative_tolerance > 0.0 &&
-           R.col(c).norm() <= options.relative_tolerance * rhs_norm[c];
+    return meets_tolerance(options, R.col(c).norm(), rhs_norm[c]);
   };
   int active_count = 0;
   for (Eigen::Index c = 0; c < m; ++c) {
@@ -284,8 +288,7 @@ PcgSummary solve_refinement(const SpdOperator& A, const Preconditioner& M,
   std::vector<bool> active(static_cast<size_t>(m));
   int active_count = 0;
   for (Eigen::Index c = 0; c < m; ++c) {
-    active[static_cast<size_t>(c)] = !(options.relative_tolerance > 0.0 &&
-                                       R.col(c).norm() <= options.relative_tolerance * rhs_norm[c]);
+    active[static_cast<size_t>(c)] = !meets_tolerance(options, R.col(c).norm(), rhs_norm[c]);
     active_count += active[static_cast<size_t>(c)] ? 1 : 0;
   }
   int iteration = 0;
@@ -309,8 +312,7 @@ PcgSummary solve_refinement(const SpdOperator& A, const Preconditioner& M,
         X.col(c) = X_before.col(c);
         R.col(c) = R_before.col(c);
       }
-      if (worse || (options.relative_tolerance > 0.0 &&
-                    R.col(c).norm() <= options.relative_tolerance * rhs_norm[c])) {
+      if (worse || meets_tolerance(options, R.col(c).norm(), rhs_norm[c])) {
         active[static_cast<size_t>(c)] = false;
         --active_count;
       }
