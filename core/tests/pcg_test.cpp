@@ -178,6 +178,32 @@ TEST(Refinement, ANearFactorConvergesToTheTolerance) {
   EXPECT_LT((B - A * X).norm() / B.norm(), 1e-9);
 }
 
+TEST(Refinement, StopsAtTheRoundingFloorBelowAnUnreachableTolerance) {
+  const Eigen::MatrixXd A = random_block_spd(20, 6, 14);
+  const CsrMatrix csr = to_csr(A);
+  const Eigen::MatrixXd B = Eigen::MatrixXd::Random(120, 3);
+  const ScaledInversePreconditioner M(A, 1.0);
+  Eigen::MatrixXd X = Eigen::MatrixXd::Zero(120, 3);
+  PcgOptions options;
+  options.max_iterations = 1000;
+  options.relative_tolerance = 1e-30;  // below what double precision resolves
+  PcgWorkspace ws;
+  const PcgSummary s = solve_refinement(CsrOperator(csr), M, B, X, options, ws);
+  ASSERT_TRUE(s.status.ok());
+  EXPECT_FALSE(s.converged);
+  EXPECT_LE(s.iterations, 4);  // the direct solve, then steps that no longer halve R
+  EXPECT_LT((B - A * X).norm() / B.norm(), 1e-10);
+
+  // M = A / 0.01: every step lowers the error, by 1 %. It stops after one step instead of
+  // running its 1,000 solves.
+  const ScaledInversePreconditioner slow(A, 0.01);
+  X.setZero();
+  const PcgSummary crawl = solve_refinement(CsrOperator(csr), slow, B, X, options, ws);
+  ASSERT_TRUE(crawl.status.ok());
+  EXPECT_EQ(crawl.iterations, 1);
+  EXPECT_NEAR((B - A * X).norm() / B.norm(), 0.99, 1e-9);
+}
+
 TEST(Refinement, AStepThatWouldRaiseTheErrorIsNotTaken) {
   const Eigen::MatrixXd A = random_block_spd(20, 6, 13);
   const CsrMatrix csr = to_csr(A);

@@ -312,7 +312,11 @@ PcgSummary solve_refinement(const SpdOperator& A, const Preconditioner& M,
         X.col(c) = X_before.col(c);
         R.col(c) = R_before.col(c);
       }
-      if (worse || meets_tolerance(options, R.col(c).norm(), rhs_norm[c])) {
+      // Stagnation: a step that did not halve the residual has reached the rounding floor
+      // (or M is far from A); more would only spin, up to max_iterations solves.
+      const double r_norm = R.col(c).norm();
+      const bool stalled = r_norm > 0.5 * R_before.col(c).norm();
+      if (worse || stalled || meets_tolerance(options, r_norm, rhs_norm[c])) {
         active[static_cast<size_t>(c)] = false;
         --active_count;
       }

@@ -154,8 +154,10 @@ PcgSummary solve_pcg(const SpdOperator& A, const Preconditioner& M,
 /// X += M⁻¹(B − A X), then the true residual by one product. With M = A this is the step a PCG
 /// iteration takes (its α = rᵀz / zᵀAz is 1), at one product less. A column whose step would
 /// raise its A-norm error (zᵀAz > 2 zᵀr, with Az = R_before − R_after: M far from A) keeps its
-/// iterate and stops; the residual reported then tells the caller to refactor. Same options
-/// (restart_worse_than_zero too) and summary as solve_pcg; the residual is always the true one.
+/// iterate and stops; the residual reported then tells the caller to refactor. A column also
+/// stops when a step did not halve its residual norm (the rounding floor: with a tolerance below
+/// it, refinement would otherwise run to max_iterations). Same options (restart_worse_than_zero
+/// too) and summary as solve_pcg; the residual is always the true one.
 PcgSummary solve_refinement(const SpdOperator& A, const Preconditioner& M,
                             const Eigen::Ref<const Eigen::MatrixXd>& B,
                             Eigen::Ref<Eigen::MatrixXd> X, const PcgOptions& options,
