@@ -36,6 +36,12 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using nlohmann::json;
 
+/// Steps between the kept factor's exact-marginal renewals when --refresh-interval is not given.
+/// Longer intervals make the step cheaper and the bounds between renewals looser; 20 is the
+/// trade-off measured on parking-garage (docs/performance.md "The covariance tool's default
+/// recovery").
+constexpr int kKeptRefreshInterval = 20;
+
 struct CovarianceArgs {
   std::string file;
   int iterations = 5;
@@ -51,10 +57,14 @@ struct CovarianceArgs {
   int histogram_bins = 20;
   double conservative_tolerance = 1e-9;
   std::string figure;  ///< Fig. 3 PNG path (empty: none)
-  std::string preconditioner = "factor";
-  /// Refactor every step (the library's and navd's default): tight at every step; 10 was the
-  /// default before 2026-12-04 (docs/consistency.md "K3 and the floor at the time of use").
-  int refresh_interval = core::StateRecoveryOptions{}.refresh_interval;
+  /// The kept factor: tight bounds at a third of the factor's step (docs/performance.md
+  /// "The covariance tool's default recovery").
+  std::string preconditioner = "kept-factor";
+  /// 0: the preconditioner's own default. The kept factor renews the exact marginals every
+  /// kKeptRefreshInterval steps (the refresh does not refactor it); the factor refactors every
+  /// step (the library's default), or its stale M leaves the bounds loose (docs/consistency.md
+  /// "K3 and the floor at the time of use").
+  int refresh_interval = 0;
   double refresh_residual = core::StateRecoveryOptions{}.refresh_residual;
   int iterations_after_refresh = core::StateRecoveryOptions{}.iterations_after_refresh;
   double rounding_margin = core::BoundsOptions{}.rounding_margin;
@@ -149,7 +159,10 @@ core::ReplayOptions replay_options(const CovarianceArgs& a) {
                                   ? core::RecoveryPreconditioner::kBlockJacobi
                                   : core::RecoveryPreconditioner::kFactor;
   o.recovery.keep_factor_equal = a.preconditioner == "kept-factor";
-  o.recovery.refresh_interval = a.refresh_interval;
+  o.recovery.refresh_interval = a.refresh_interval > 0 ? a.refresh_interval
+                                : o.recovery.keep_factor_equal
+                                    ? kKeptRefreshInterval
+                                    : core::StateRecoveryOptions{}.refresh_interval;
   o.recovery.refresh_residual = a.refresh_residual;
   o.recovery.iterations_after_refresh = a.iterations_after_refresh;
   o.bounds.certify_truncation = !a.no_certify;
@@ -375,12 +388,14 @@ void add_covariance(CLI::App& app) {
                   "generic (the original, for comparison)")
       ->check(CLI::IsMember({"packed", "generic"}));
   cmd->add_option("--preconditioner", args->preconditioner,
-                  "PCG preconditioner: factor (Cholesky of Λ refreshed every few steps, default), "
-                  "kept-factor (a factor kept equal to Λ by row modifications and rank updates; "
-                  "the refresh renews only the exact marginals) or block-jacobi")
+                  "recovery preconditioner: kept-factor (default: a factor kept equal to Λ by "
+                  "row modifications and rank updates, one refinement step per image; the "
+                  "refresh renews only the exact marginals), factor (Cholesky of Λ refreshed "
+                  "every few steps) or block-jacobi")
       ->check(CLI::IsMember({"factor", "kept-factor", "block-jacobi"}));
   cmd->add_option("--refresh-interval", args->refresh_interval,
-                  "factor: refactor after this many steps (default 1: every step)")
+                  "steps between refreshes: kept-factor renews the exact marginals (default "
+                  "20), factor refactors (default 1: every step)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--refresh-residual", args->refresh_residual,
                   "factor: refactor when the previous step's relative residual exceeded this")

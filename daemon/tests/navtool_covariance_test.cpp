@@ -127,12 +127,30 @@ TEST(NavtoolCovariance, KeptFactorIsTightAndConservativeAtTheTimeOfUse) {
   EXPECT_LT(j["logdet_ratio_relative_ours"]["median"].get<double>(), 1.0);
 }
 
+TEST(NavtoolCovariance, DefaultsAreTheKeptFactorWithExactMarginalsEveryTwentySteps) {
+  NAV_REQUIRE_DATA(path, "posegraphs/smallGrid3D.g2o");
+  const RunResult r = run_navtool(args_for(path.string(), "--json --checks 10"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["kept_factor"], true);
+  EXPECT_EQ(j["refreshes"], 7);  // 124 steps: the first and every 20th
+  EXPECT_EQ(j["time_of_use_conservative_fraction"], 1.0);
+  EXPECT_EQ(j["time_of_use_joint_conservative_fraction"], 1.0);
+  // --preconditioner factor keeps its own default: a refactorisation at every step.
+  const RunResult f =
+      run_navtool(args_for(path.string(), "--json --checks 0 --preconditioner factor"));
+  ASSERT_EQ(f.exit_code, 0) << f.err;
+  EXPECT_EQ(json::parse(f.out)["refreshes"], 124);
+}
+
 TEST(NavtoolCovariance, ToleranceModeAtTheIterationCapSucceedsAndCountsTheCappedSteps) {
   NAV_REQUIRE_DATA(path, "posegraphs/smallGrid3D.g2o");
   const RunResult r =
-      // Steps between refreshes (a refreshed step is the direct solve, converged at once).
+      // The stale factor's steps between refreshes (a refreshed step, and every step of the
+      // kept factor, is the direct solve, at the rounding floor at once).
       run_navtool(args_for(path.string(),
-                           "--json --tolerance 1e-15 --max-iterations 2 --refresh-interval 10"));
+                           "--json --tolerance 1e-15 --max-iterations 2 --preconditioner factor "
+                           "--refresh-interval 10"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json j = json::parse(r.out);
   EXPECT_EQ(j["mode"], "tolerance");
