@@ -253,6 +253,7 @@ void run_covariance(const CovarianceArgs& args) {
   out["file"] = args.file;
   out["poses"] = graph.vertices.size();
   out["edges"] = graph.edges.size();
+  out["planar"] = graph.planar;
   out["state_dim"] = lambda.rows();
   out["nnz_fraction"] = static_cast<double>(lambda.nonZeros()) / (dim * dim);
   out["steps"] = steps;
@@ -359,7 +360,10 @@ void add_covariance(CLI::App& app) {
       "1e6, a weak prior at the file's estimate); a vertex with no edge to an earlier vertex "
       "is an error naming it. Linearised at the file's estimates; gauge prior sigma 1e-3 on "
       "vertex 0.");
-  cmd->add_option("file", args->file, "g2o file (VERTEX_SE3:QUAT / EDGE_SE3:QUAT)")->required();
+  cmd->add_option(
+         "file", args->file,
+         "g2o file (VERTEX_SE3:QUAT / EDGE_SE3:QUAT, or VERTEX_SE2 / EDGE_SE2 lifted to 3-D)")
+      ->required();
   auto* iterations = cmd->add_option("--iterations", args->iterations,
                                      "fixed PCG iterations per step (default 5; real-time mode)")
                          ->check(CLI::NonNegativeNumber);

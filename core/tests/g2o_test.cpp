@@ -11,6 +11,7 @@
 #include <numbers>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "nav/core/geometry/pose.h"
 #include "nav/core/geometry/rotation.h"
@@ -150,7 +151,14 @@ TEST(G2o, QuaternionCloseToUnitIsNormalised) {
 TEST(G2o, MalformedInputNamesLineAndReason) {
   const std::string v0 = "VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\n";
   const std::string v1 = "VERTEX_SE3:QUAT 1 1 0 0 0 0 0 1\n";
-  expect_error(v0 + "VERTEX_SE2 1 0 0 0\n", 2, "unknown tag 'VERTEX_SE2'");
+  expect_error(v0 + "VERTEX_XY 1 0 0\n", 2, "unknown tag 'VERTEX_XY'");
+  expect_error(v0 + "VERTEX_SE2 1 0 0 0\n", 2,
+               "planar (SE2) element in a file whose line 1 is 3-D (SE3)");
+  expect_error("VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 0 0\n", 2, "has 4 fields, expected 5");
+  expect_error("VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 0 0 0\nEDGE_SE2 0 1 0 0 0 1 0 0 -1 0 1\n", 3,
+               "not positive definite");
+  expect_error(v0 + "FIX\n", 2, "FIX names no vertex");
+  expect_error(v0 + "FIX 0 x\n", 2, "non-integer vertex id 'x'");
   expect_error("VERTEX_SE3:QUAT 0 0 0 0 0 0 1\n", 1, "has 8 fields, expected 9");
   expect_error(v0 + v1 + "EDGE_SE3:QUAT 0 1 1 0 0 0 0 0 1 1 0 0\n", 3, "expected 31");
   expect_error("VERTEX_SE3:QUAT 0 0 abc 0 0 0 0 1\n", 1, "non-numeric y 'abc'");
@@ -180,6 +188,124 @@ TEST(G2o, MalformedInputNamesLineAndReason) {
   expect_error(v0 + "EDGE_SE3:QUAT 0 1 0 0 0 0 0 0 1" + kIdentityInfo + "\n" + "\n" + v1 +
                    "EDGE_SE3:QUAT 0 9 0 0 0 0 0 0 1" + kIdentityInfo + "\n",
                5, "edge to unknown vertex 9");
+}
+
+TEST(G2o, FixLinesAreReadAndTheGaugeStaysThePriorOnVertexZero) {
+  const PoseGraph g =
+      parse("FIX 1\n" + vertex_line(0, Vec6::Zero()) + vertex_line(1, Vec6::Ones() * 0.1));
+  EXPECT_EQ(g.vertices.size(), 2u);
+  EXPECT_FALSE(g.planar);
+}
+
+/// g2o's SE2 pose (x, y, theta) as a homogeneous 3x3 transform, and its inverse's product.
+Eigen::Matrix3d se2(const Eigen::Vector3d& p) {
+  Eigen::Matrix3d T = Eigen::Matrix3d::Identity();
+  T.topLeftCorner<2, 2>() = Eigen::Rotation2Dd(p[2]).toRotationMatrix();
+  T.topRightCorner<2, 1>() = p.head<2>();
+  return T;
+}
+Eigen::Vector3d se2_vector(const Eigen::Matrix3d& T) {
+  return {T(0, 2), T(1, 2), std::atan2(T(1, 0), T(0, 0))};
+}
+
+struct PlanarEdge {
+  int i, j;
+  Eigen::Matrix3d information;
+};
+
+TEST(G2o, PlanarGraphIsLiftedTo3D) {
+  const PoseGraph g = parse(
+      "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 2 3.5\n"
+      "EDGE_SE2 0 1 1 2 0.5 100 10 5 200 -4 50\n");
+  ASSERT_TRUE(g.planar);
+  ASSERT_EQ(g.vertices.size(), 2u);
+  EXPECT_LT(max_abs_diff(g.vertices[1].pose, (Vec6() << 1, 2, 0, 0, 0, 3.5 - 2 * kPi).finished()),
+            1e-12);
+  const G2oEdge& e = g.edges[0];
+  EXPECT_LT(max_abs_diff(e.measurement, (Vec6() << 1, 2, 0, 0, 0, 0.5).finished()), 1e-15);
+  // The in-plane information on [t_ij; heading_ij]: g2o's EdgeSE2 error is
+  // [R(0.5)ᵀ (t - t_z); theta - theta_z], so Omega_y = Gᵀ Omega_2 G with G = diag(R(0.5)ᵀ, 1).
+  Eigen::Matrix3d omega2;
+  omega2 << 100, 10, 5, 10, 200, -4, 5, -4, 50;
+  Eigen::Matrix3d G = Eigen::Matrix3d::Identity();
+  G.topLeftCorner<2, 2>() = Eigen::Rotation2Dd(0.5).toRotationMatrix().transpose();
+  const Eigen::Matrix3d expected = G.transpose() * omega2 * G;
+  constexpr int kIn[3] = {0, 1, 5};
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(e.information(kIn[r], kIn[c]), expected(r, c), 1e-9);
+  }
+  // Out of plane: z with the mean x/y information, roll and pitch with theta's, uncorrelated.
+  EXPECT_NEAR(e.information(2, 2), 150.0, 1e-9);
+  EXPECT_NEAR(e.information(3, 3), 50.0, 1e-9);
+  EXPECT_NEAR(e.information(4, 4), 50.0, 1e-9);
+  for (int in : kIn) {
+    for (int out : {2, 3, 4}) EXPECT_NEAR(e.information(in, out), 0.0, 1e-9);
+  }
+}
+
+TEST(G2o, LiftedPlanarMarginalsEqualThePlanarGraphs) {
+  // A loop of five poses with a closure and a cross edge; measurements consistent with the
+  // poses, so both linearisations below are at the measurement.
+  const std::vector<Eigen::Vector3d> poses = {
+      {0, 0, 0}, {2, 0.3, 0.6}, {3, 2, 1.9}, {1, 3, -2.8}, {-0.5, 1.5, -1.4}};
+  Eigen::Matrix3d a, b;
+  a << 400, 30, -20, 30, 250, 10, -20, 10, 900;
+  b << 90, -5, 3, -5, 60, 1, 3, 1, 300;
+  const std::vector<PlanarEdge> edges = {{0, 1, a}, {1, 2, b}, {2, 3, a},
+                                         {3, 4, b}, {4, 0, a}, {1, 3, b}};
+  std::ostringstream text;
+  text.precision(17);
+  for (size_t k = 0; k < poses.size(); ++k) {
+    text << "VERTEX_SE2 " << k << " " << poses[k].transpose() << "\n";
+  }
+  for (const PlanarEdge& e : edges) {
+    const Eigen::Matrix3d& I = e.information;
+    text << "EDGE_SE2 " << e.i << " " << e.j << " "
+         << se2_vector(se2(poses[e.i]).inverse() * se2(poses[e.j])).transpose() << " " << I(0, 0)
+         << " " << I(0, 1) << " " << I(0, 2) << " " << I(1, 1) << " " << I(1, 2) << " " << I(2, 2)
+         << "\n";
+  }
+  const PoseGraph g = parse(text.str());
+  const Eigen::MatrixXd lifted_cov = Eigen::MatrixXd(assemble_information_sparse(g)).inverse();
+
+  // Reference: the planar graph in g2o's own terms, Λ = P + Σ Jᵀ Ω₂ J with J the numeric
+  // Jacobian of EdgeSE2's error toVector(Z⁻¹ X_i⁻¹ X_j) and P the in-plane part of the prior.
+  const Eigen::Index n = static_cast<Eigen::Index>(poses.size()) * 3;
+  Eigen::MatrixXd planar = Eigen::MatrixXd::Zero(n, n);
+  planar.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() * 1e6;
+  for (const PlanarEdge& e : edges) {
+    const Eigen::Matrix3d Z_inv = (se2(poses[e.i]).inverse() * se2(poses[e.j])).inverse();
+    const auto error = [&](const Eigen::VectorXd& x) {
+      return Eigen::VectorXd(se2_vector(Z_inv * se2(x.head<3>()).inverse() * se2(x.tail<3>())));
+    };
+    Eigen::VectorXd x(6);
+    x << poses[e.i], poses[e.j];
+    const Eigen::MatrixXd J = numeric_jacobian(error, x, 1e-6);
+    const Eigen::MatrixXd JtOJ = J.transpose() * e.information * J;
+    const Eigen::Index ai = 3 * e.i, aj = 3 * e.j;
+    planar.block(ai, ai, 3, 3) += JtOJ.topLeftCorner(3, 3);
+    planar.block(aj, aj, 3, 3) += JtOJ.bottomRightCorner(3, 3);
+    planar.block(ai, aj, 3, 3) += JtOJ.topRightCorner(3, 3);
+    planar.block(aj, ai, 3, 3) += JtOJ.bottomLeftCorner(3, 3);
+  }
+  const Eigen::MatrixXd planar_cov = planar.inverse();
+  constexpr int kIn[3] = {0, 1, 5};
+  for (Eigen::Index v = 0; v < static_cast<Eigen::Index>(poses.size()); ++v) {
+    for (Eigen::Index w = 0; w < static_cast<Eigen::Index>(poses.size()); ++w) {
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+          const double ref = planar_cov(3 * v + r, 3 * w + c);
+          const double got = lifted_cov(6 * v + kIn[r], 6 * w + kIn[c]);
+          EXPECT_NEAR(got, ref, 1e-6 * planar_cov.cwiseAbs().maxCoeff())
+              << "vertices " << v << ", " << w << " entry " << r << ", " << c;
+        }
+        for (int out : {2, 3, 4}) {  // in-plane and out-of-plane uncorrelated
+          EXPECT_NEAR(lifted_cov(6 * v + kIn[r], 6 * w + out), 0.0,
+                      1e-9 * lifted_cov.cwiseAbs().maxCoeff());
+        }
+      }
+    }
+  }
 }
 
 TEST(G2o, MissingFileIsAnError) { EXPECT_THROW(read_g2o("/nonexistent/graph.g2o"), G2oError); }

@@ -1,17 +1,18 @@
 // Tests of `navtool covariance` (the built navtool binary, NAVTOOL_PATH): JSON report on real
 // pose graphs, every bound conservative, and clear errors naming the line or vertex for
 // malformed input (small temporary files).
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <gtest/gtest.h>
-
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "nav/testing/data.h"
 
@@ -165,6 +166,52 @@ TEST(NavtoolCovariance, ToleranceModeAtTheIterationCapSucceedsAndCountsTheCapped
   EXPECT_EQ(j["conservative_fraction"], 1.0);
   // --max-iterations only means something with --tolerance.
   EXPECT_NE(run_navtool(args_for(path.string(), "--json --max-iterations 2")).exit_code, 0);
+}
+
+/// A planar g2o graph (VERTEX_SE2 / EDGE_SE2, with a FIX line as many such files have): a
+/// 6 x 6 lattice walked row by row, odometry between consecutive poses and a loop closure to
+/// the pose below in the previous row, measurements perturbed deterministically.
+std::string planar_lattice() {
+  std::ostringstream g;
+  g << "FIX 0\n";
+  constexpr int kSide = 6;
+  auto xy = [](int k) {
+    const int row = k / kSide, col = row % 2 == 0 ? k % kSide : kSide - 1 - k % kSide;
+    return std::pair<double, double>{col, row};
+  };
+  for (int k = 0; k < kSide * kSide; ++k) {
+    g << "VERTEX_SE2 " << k << " " << xy(k).first << " " << xy(k).second << " 0\n";
+  }
+  auto edge = [&](int i, int j) {
+    const double noise = 0.02 * std::sin(7.0 * i + 3.0 * j);
+    g << "EDGE_SE2 " << i << " " << j << " " << xy(j).first - xy(i).first + noise << " "
+      << xy(j).second - xy(i).second - noise << " " << 0.5 * noise << " 400 20 0 300 -10 2500\n";
+  };
+  for (int k = 1; k < kSide * kSide; ++k) {
+    edge(k - 1, k);
+    const int row = k / kSide;
+    if (row == 0) continue;
+    for (int i = (row - 1) * kSide; i < row * kSide; ++i) {
+      if (xy(i).first == xy(k).first && i != k - 1) edge(i, k);
+    }
+  }
+  return g.str();
+}
+
+TEST(NavtoolCovariance, PlanarGraphIsLiftedAndItsBoundsAreConservative) {
+  const std::string file = write_graph("planar.g2o", planar_lattice());
+  const RunResult r = run_navtool(args_for(file, "--json --checks 10"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["planar"], true);
+  EXPECT_EQ(j["poses"], 36);
+  EXPECT_EQ(j["edges"], 35 + 30 - 5);  // odometry, and one closure per pose above row 0 but
+                                       // the row's first, whose lower neighbour is its odometry
+  EXPECT_EQ(j["state_dim"], 216);
+  EXPECT_EQ(j["conservative_fraction"], 1.0);
+  EXPECT_EQ(j["time_of_use_conservative_fraction"], 1.0);
+  EXPECT_EQ(j["time_of_use_joint_conservative_fraction"], 1.0);
+  EXPECT_LT(j["logdet_ratio_relative_ours"]["median"].get<double>(), 1.0);
 }
 
 TEST(NavtoolCovariance, ChainGraphWithLoopClosure) {

@@ -1,5 +1,5 @@
-// g2o VERTEX_SE3:QUAT / EDGE_SE3:QUAT reader and pose-graph information assembly
-// (posegraph/g2o.h). Conversion of the information matrix: see the header comment.
+// g2o reader (VERTEX_SE3:QUAT / EDGE_SE3:QUAT, and VERTEX_SE2 / EDGE_SE2 lifted to 3-D) and
+// pose-graph information assembly (posegraph/g2o.h). Conversions: see the header comment.
 
 #include "nav/core/posegraph/g2o.h"
 
@@ -27,6 +27,8 @@ namespace {
 
 constexpr int kVertexFields = 9;  // tag id x y z qx qy qz qw
 constexpr int kEdgeFields = 31;   // tag i j x y z qx qy qz qw + 21 information entries
+constexpr int kPlanarVertexFields = 5;  // tag id x y theta
+constexpr int kPlanarEdgeFields = 12;   // tag i j dx dy dtheta + 6 information entries
 
 struct LineContext {
   const std::string& source;
@@ -101,6 +103,42 @@ Mat6 parse_information(const std::vector<std::string>& fields, size_t first,
   return information;
 }
 
+/// Reads "x y theta" at fields[first]: the pose [x y 0 0 0 theta] (theta wrapped).
+Vec6 parse_planar_pose(const std::vector<std::string>& fields, size_t first,
+                       const LineContext& ctx) {
+  Vec6 pose = Vec6::Zero();
+  pose[0] = parse_double(fields[first], "x", ctx);
+  pose[1] = parse_double(fields[first + 1], "y", ctx);
+  pose[5] = wrap_angle(parse_double(fields[first + 2], "theta", ctx));
+  return pose;
+}
+
+/// EdgeSE2's information on [t_err (2); theta_err] as EdgeSE3's on [t_err; qvec_err]
+/// (header comment): qvec_z = theta/2 scales the theta row and column by 2; z gets the mean of
+/// the x and y entries, qvec_x and qvec_y the qvec_z entry.
+Mat6 lifted_planar_information(const std::vector<std::string>& fields, size_t first,
+                               const LineContext& ctx) {
+  Mat3 planar;
+  size_t f = first;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = r; c < 3; ++c) {
+      planar(r, c) = planar(c, r) = parse_double(fields[f++], "information entry", ctx);
+    }
+  }
+  if (Eigen::LLT<Mat3>(planar).info() != Eigen::Success) {
+    ctx.fail("information matrix is not positive definite (LLT)");
+  }
+  constexpr int kIn[3] = {0, 1, 5};  // x, y, qvec_z in EdgeSE3's error
+  constexpr double kScale[3] = {1.0, 1.0, 2.0};
+  Mat6 lifted = Mat6::Zero();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) lifted(kIn[r], kIn[c]) = kScale[r] * kScale[c] * planar(r, c);
+  }
+  lifted(2, 2) = 0.5 * (planar(0, 0) + planar(1, 1));
+  lifted(3, 3) = lifted(4, 4) = lifted(5, 5);
+  return lifted;
+}
+
 struct RawEdge {
   int from, to, line;
   Vec6 measurement;
@@ -116,76 +154,114 @@ Mat6 g2o_error_jacobian(const Vec6& measurement) {
   return G;
 }
 
-PoseGraph read_g2o(std::istream& in, const std::string& source_name) {
-  std::map<int, std::pair<Vec6, int>> vertices;  // id -> (pose, line)
-  std::vector<RawEdge> edges;
-  std::string text;
-  int line_no = 0;
-  while (std::getline(in, text)) {
-    ++line_no;
-    const LineContext ctx{source_name, line_no};
-    const std::vector<std::string> fields = split_fields(text);
-    if (fields.empty() || fields[0][0] == '#') continue;
+namespace {
+
+/// The elements of a file as read, before edges are resolved against vertices.
+class RawGraph {
+ public:
+  /// Parses one non-comment line (fields non-empty).
+  void read_line(const std::vector<std::string>& fields, const LineContext& ctx) {
     const std::string& tag = fields[0];
-    if (tag == "VERTEX_SE3:QUAT") {
-      if (fields.size() != kVertexFields) {
-        ctx.fail("VERTEX_SE3:QUAT has " + std::to_string(fields.size()) + " fields, expected " +
-                 std::to_string(kVertexFields));
-      }
+    if (tag == "VERTEX_SE3:QUAT" || tag == "VERTEX_SE2") {
+      const bool planar = tag == "VERTEX_SE2";
+      expect_fields(fields, planar ? kPlanarVertexFields : kVertexFields, ctx);
+      note_kind(planar, ctx);
       const int id = parse_id(fields[1], ctx);
-      const Vec6 pose = parse_pose(fields, 2, ctx);
-      const auto [it, inserted] = vertices.emplace(id, std::make_pair(pose, line_no));
+      const Vec6 pose = planar ? parse_planar_pose(fields, 2, ctx) : parse_pose(fields, 2, ctx);
+      const auto [it, inserted] = vertices.emplace(id, std::make_pair(pose, ctx.line));
       if (!inserted) {
         ctx.fail("duplicate vertex " + std::to_string(id) + " (first defined on line " +
                  std::to_string(it->second.second) + ")");
       }
-    } else if (tag == "EDGE_SE3:QUAT") {
-      if (fields.size() != kEdgeFields) {
-        ctx.fail("EDGE_SE3:QUAT has " + std::to_string(fields.size()) + " fields, expected " +
-                 std::to_string(kEdgeFields));
-      }
+    } else if (tag == "EDGE_SE3:QUAT" || tag == "EDGE_SE2") {
+      const bool planar = tag == "EDGE_SE2";
+      expect_fields(fields, planar ? kPlanarEdgeFields : kEdgeFields, ctx);
+      note_kind(planar, ctx);
       RawEdge e;
       e.from = parse_id(fields[1], ctx);
       e.to = parse_id(fields[2], ctx);
       if (e.from == e.to) ctx.fail("edge from vertex " + std::to_string(e.from) + " to itself");
-      e.line = line_no;
-      e.measurement = parse_pose(fields, 3, ctx);
-      e.information_g2o = parse_information(fields, 10, ctx);
+      e.line = ctx.line;
+      e.measurement = planar ? parse_planar_pose(fields, 3, ctx) : parse_pose(fields, 3, ctx);
+      e.information_g2o =
+          planar ? lifted_planar_information(fields, 6, ctx) : parse_information(fields, 10, ctx);
       edges.push_back(e);
+    } else if (tag == "FIX") {
+      if (fields.size() < 2) ctx.fail("FIX names no vertex");
+      for (size_t k = 1; k < fields.size(); ++k) parse_id(fields[k], ctx);  // gauge: see header
     } else {
-      ctx.fail("unknown tag '" + tag + "' (expected VERTEX_SE3:QUAT or EDGE_SE3:QUAT)");
+      ctx.fail("unknown tag '" + tag +
+               "' (expected VERTEX_SE3:QUAT, EDGE_SE3:QUAT, VERTEX_SE2, EDGE_SE2 or FIX)");
     }
+  }
+
+  std::map<int, std::pair<Vec6, int>> vertices;  // id -> (pose, line)
+  std::vector<RawEdge> edges;
+  int planar_line = 0, spatial_line = 0;  // first line of each kind, 0 if none
+
+ private:
+  static void expect_fields(const std::vector<std::string>& fields, int expected,
+                            const LineContext& ctx) {
+    if (fields.size() != static_cast<size_t>(expected)) {
+      ctx.fail(fields[0] + " has " + std::to_string(fields.size()) + " fields, expected " +
+               std::to_string(expected));
+    }
+  }
+  void note_kind(bool planar, const LineContext& ctx) {
+    int& first = planar ? planar_line : spatial_line;
+    if (first == 0) first = ctx.line;
+    const int other = planar ? spatial_line : planar_line;
+    if (other != 0) {
+      ctx.fail(std::string(planar ? "planar (SE2)" : "3-D (SE3)") +
+               " element in a file whose line " + std::to_string(other) + " is " +
+               (planar ? "3-D (SE3)" : "planar (SE2)"));
+    }
+  }
+};
+
+}  // namespace
+
+PoseGraph read_g2o(std::istream& in, const std::string& source_name) {
+  RawGraph raw;
+  std::string text;
+  int line_no = 0;
+  while (std::getline(in, text)) {
+    ++line_no;
+    const std::vector<std::string> fields = split_fields(text);
+    if (fields.empty() || fields[0][0] == '#') continue;
+    raw.read_line(fields, LineContext{source_name, line_no});
   }
   if (in.bad()) throw G2oError(source_name, line_no, "read error");
 
   PoseGraph graph;
   std::map<int, int> index_of;
-  graph.vertices.reserve(vertices.size());
-  for (const auto& [id, pose_line] : vertices) {
+  graph.planar = raw.planar_line != 0;
+  graph.vertices.reserve(raw.vertices.size());
+  for (const auto& [id, pose_line] : raw.vertices) {
     index_of[id] = static_cast<int>(graph.vertices.size());
     graph.vertices.push_back(G2oVertex{id, pose_line.first});
   }
-  graph.edges.reserve(edges.size());
-  for (const RawEdge& raw : edges) {
-    const LineContext ctx{source_name, raw.line};
-    const auto from = index_of.find(raw.from);
-    const auto to = index_of.find(raw.to);
-    if (from == index_of.end()) ctx.fail("edge from unknown vertex " + std::to_string(raw.from));
-    if (to == index_of.end()) ctx.fail("edge to unknown vertex " + std::to_string(raw.to));
+  graph.edges.reserve(raw.edges.size());
+  for (const RawEdge& edge : raw.edges) {
+    const LineContext ctx{source_name, edge.line};
+    const auto from = index_of.find(edge.from);
+    const auto to = index_of.find(edge.to);
+    if (from == index_of.end()) ctx.fail("edge from unknown vertex " + std::to_string(edge.from));
+    if (to == index_of.end()) ctx.fail("edge to unknown vertex " + std::to_string(edge.to));
     G2oEdge e;
-    e.from = raw.from;
-    e.to = raw.to;
+    e.from = edge.from;
+    e.to = edge.to;
     e.from_index = from->second;
     e.to_index = to->second;
-    e.measurement = raw.measurement;
-    e.information_g2o = raw.information_g2o;
-    if (pitch_is_singular(raw.measurement[4])) {
+    e.measurement = edge.measurement;
+    e.information_g2o = edge.information_g2o;
+    if (pitch_is_singular(edge.measurement[4])) {
       ctx.fail("edge measurement pitch within 0.5 deg of +-90 deg: Euler information undefined");
     }
-    const Mat6 G = g2o_error_jacobian(raw.measurement);
-    e.information = G.transpose() * raw.information_g2o * G;
+    const Mat6 G = g2o_error_jacobian(edge.measurement);
+    e.information = G.transpose() * edge.information_g2o * G;
     e.information = 0.5 * (e.information + e.information.transpose()).eval();
-    e.line = raw.line;
+    e.line = edge.line;
     graph.edges.push_back(e);
   }
   return graph;

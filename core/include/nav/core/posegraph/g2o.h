@@ -1,6 +1,7 @@
 #pragma once
-// Reader for 3-D pose graphs in the g2o text format (VERTEX_SE3:QUAT / EDGE_SE3:QUAT), as
-// distributed with SE-Sync (Rosen et al.) and used by g2o, GTSAM, iSAM and SLAM++; and the
+// Reader for pose graphs in the g2o text format: 3-D (VERTEX_SE3:QUAT / EDGE_SE3:QUAT), as
+// distributed with SE-Sync (Rosen et al.) and used by g2o, GTSAM, iSAM and SLAM++, and planar
+// (VERTEX_SE2 / EDGE_SE2, e.g. the Intel, M3500 and Manhattan graphs) lifted to 3-D; and the
 // assembly of the information matrix Lambda = sum_e H_e^T Omega_e H_e of such a graph.
 //
 // Conversions to navd's conventions (core/README.md):
@@ -20,7 +21,20 @@
 //    by id and `index` of a vertex is its position in that order (0..N-1); edges carry both the
 //    file ids and the indices. When the file's ids are already 0..N-1 the two coincide.
 //
-// Lines: blank lines and lines starting with '#' are ignored. Any other tag is an error.
+//  * Planar graphs are lifted: a pose (x, y, theta) becomes [x y 0 0 0 theta]. g2o's EdgeSE2
+//    error [R_z^T (t - t_z); theta - theta_z] is EdgeSE3's [t_err; qvec_err] in the plane with
+//    qvec_z = theta/2, so its 3x3 information Omega_2 becomes Omega_g2o (6x6) with the theta
+//    row and column scaled by 2; the out-of-plane axes, which the file does not constrain,
+//    get information as strong as the in-plane ones (z: the mean of Omega_2's x and y
+//    entries; qvec_x and qvec_y: its qvec_z entry) and no correlation with them. At planar
+//    poses z, roll and pitch decouple from x, y and heading to first order (a rotation about
+//    x or y moves an in-plane vector only along z), so the in-plane marginals are those of
+//    the planar graph (test: G2o.LiftedPlanarMarginalsEqualThePlanarGraphs). A file mixing
+//    planar and 3-D elements is an error.
+//
+// Lines: blank lines and lines starting with '#' are ignored. FIX lines are read and their
+// ids checked, and otherwise ignored: the gauge is the prior on vertex index 0
+// (AssemblyOptions). Any other tag is an error.
 // All malformed input throws G2oError with "source:line: reason".
 
 #include <Eigen/SparseCore>
@@ -60,13 +74,14 @@ struct G2oEdge {
   int to_index = 0;      ///< index of vertex j in PoseGraph::vertices
   Vec6 measurement;      ///< x_ij = [t_ij; rpy_ij] (tail_to_tail convention, geometry/pose.h)
   Mat6 information;      ///< on our [x y z roll pitch heading] parameters (converted, see above)
-  Mat6 information_g2o;  ///< as in the file, on g2o's [t; qvec] error
+  Mat6 information_g2o;  ///< on g2o's EdgeSE3 [t; qvec] error: the file's, or lifted if planar
   int line = 0;          ///< line number in the source (1-based)
 };
 
 struct PoseGraph {
   std::vector<G2oVertex> vertices;  ///< sorted by id; index = position
   std::vector<G2oEdge> edges;       ///< in file order
+  bool planar = false;              ///< read from VERTEX_SE2 / EDGE_SE2 and lifted (above)
 };
 
 /// Parses a whole g2o stream. `source_name` is only used in error messages.
