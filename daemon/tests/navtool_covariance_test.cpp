@@ -256,7 +256,7 @@ TEST(NavtoolCovariance, MalformedLinesAreErrorsNamingTheLine) {
     const char* alternative = nullptr;  // the reader or the replay may catch it
   };
   const Case cases[] = {
-      {"unknown_tag.g2o", kVertices + "FIX 0\n", ":4:"},
+      {"unknown_tag.g2o", kVertices + "VERTEX_XY 3 0 0\n", ":4:"},
       {"short_edge.g2o", kVertices + "EDGE_SE3:QUAT 0 1 1 0 0\n", ":4:"},
       {"bad_number.g2o", "VERTEX_SE3:QUAT 0 0 zero 0 0 0 0 1\n", ":1:"},
       {"bad_info.g2o",
