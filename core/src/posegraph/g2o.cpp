@@ -87,19 +87,21 @@ Vec6 parse_pose(const std::vector<std::string>& fields, size_t first, const Line
   return pose;
 }
 
-Mat6 parse_information(const std::vector<std::string>& fields, size_t first,
-                       const LineContext& ctx) {
-  Mat6 information;
+/// Reads the upper triangle of an N x N information matrix, row by row, from fields[first];
+/// fails unless it is positive definite.
+template <int N>
+Eigen::Matrix<double, N, N> parse_information(const std::vector<std::string>& fields, size_t first,
+                                              const LineContext& ctx) {
+  Eigen::Matrix<double, N, N> information;
   size_t f = first;
-  for (int r = 0; r < 6; ++r) {
-    for (int c = r; c < 6; ++c) {
-      const double v = parse_double(fields[f++], "information entry", ctx);
-      information(r, c) = v;
-      information(c, r) = v;
+  for (int r = 0; r < N; ++r) {
+    for (int c = r; c < N; ++c) {
+      information(r, c) = information(c, r) = parse_double(fields[f++], "information entry", ctx);
     }
   }
-  Eigen::LLT<Mat6> llt(information);
-  if (llt.info() != Eigen::Success) ctx.fail("information matrix is not positive definite (LLT)");
+  if (Eigen::LLT<Eigen::Matrix<double, N, N>>(information).info() != Eigen::Success) {
+    ctx.fail("information matrix is not positive definite (LLT)");
+  }
   return information;
 }
 
@@ -118,16 +120,7 @@ Vec6 parse_planar_pose(const std::vector<std::string>& fields, size_t first,
 /// the x and y entries, qvec_x and qvec_y the qvec_z entry.
 Mat6 lifted_planar_information(const std::vector<std::string>& fields, size_t first,
                                const LineContext& ctx) {
-  Mat3 planar;
-  size_t f = first;
-  for (int r = 0; r < 3; ++r) {
-    for (int c = r; c < 3; ++c) {
-      planar(r, c) = planar(c, r) = parse_double(fields[f++], "information entry", ctx);
-    }
-  }
-  if (Eigen::LLT<Mat3>(planar).info() != Eigen::Success) {
-    ctx.fail("information matrix is not positive definite (LLT)");
-  }
+  const Mat3 planar = parse_information<3>(fields, first, ctx);
   constexpr int kIn[3] = {0, 1, 5};  // x, y, qvec_z in EdgeSE3's error
   constexpr double kScale[3] = {1.0, 1.0, 2.0};
   Mat6 lifted = Mat6::Zero();
@@ -183,8 +176,8 @@ class RawGraph {
       if (e.from == e.to) ctx.fail("edge from vertex " + std::to_string(e.from) + " to itself");
       e.line = ctx.line;
       e.measurement = planar ? parse_planar_pose(fields, 3, ctx) : parse_pose(fields, 3, ctx);
-      e.information_g2o =
-          planar ? lifted_planar_information(fields, 6, ctx) : parse_information(fields, 10, ctx);
+      e.information_g2o = planar ? lifted_planar_information(fields, 6, ctx)
+                                 : parse_information<6>(fields, 10, ctx);
       edges.push_back(e);
     } else if (tag == "FIX") {
       if (fields.size() < 2) ctx.fail("FIX names no vertex");
