@@ -4,7 +4,7 @@
 //                    [--draw OUT.png]
 // CAMERA.yaml: a `camera:` block with config/sim.yaml's camera keys: fx, fy, cx, cy,
 // distortion [k1, k2, p1, p2, k3], optional pixel_format (mono8 | mono12 | mono16, the bits of
-// 16-bit images; default mono12), width, height.
+// 16-bit images; without it a 16-bit file is taken at its 16-bit full scale), width, height.
 // PRIOR.json: {"x_i_j": [x, y, z, roll, pitch, heading] of camera j in camera i (m, rad),
 //              "covariance": 36 numbers row-major, "scene_depth_m": d, "scene_depth_sigma_m": s}.
 // --json prints one object: success, reason, measurement (5), covariance (25 row-major),
@@ -45,7 +45,7 @@ double ms_since(Clock::time_point t) {
 
 struct CameraFile {
   vision::CameraIntrinsics camera;
-  int bits_per_pixel = 12;
+  int bits_per_pixel = 16;  ///< of 16-bit files (a file carries no pixel format)
 };
 
 CameraFile read_camera(const std::string& path) {

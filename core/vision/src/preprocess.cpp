@@ -57,8 +57,9 @@ Status validate_raw_frame(const cv::Mat& raw, const CameraIntrinsics& camera,
     return invalid("frame depth " + std::to_string(raw.depth()) +
                    " is neither 8-bit (CV_8U) nor 16-bit (CV_16U)");
   }
-  if (raw.channels() != 1 && raw.channels() != 3) {
-    return invalid("frame has " + std::to_string(raw.channels()) + " channels, expected 1 or 3");
+  if (raw.channels() != 1 && raw.channels() != 3 && raw.channels() != 4) {
+    return invalid("frame has " + std::to_string(raw.channels()) +
+                   " channels, expected 1 (grey), 3 (BGR) or 4 (BGRA)");
   }
   if (camera.width_px > 0 && camera.height_px > 0 &&
       (raw.cols != camera.width_px || raw.rows != camera.height_px)) {
@@ -103,9 +104,15 @@ Status frame_from_buffer(const std::uint8_t* data, std::size_t size_bytes, int w
   return Status::Ok();
 }
 
+cv::Mat to_grey(const cv::Mat& image) {
+  cv::Mat grey = image;
+  if (image.channels() == 3) cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
+  if (image.channels() == 4) cv::cvtColor(image, grey, cv::COLOR_BGRA2GRAY);
+  return grey;
+}
+
 cv::Mat to_unit_float(const cv::Mat& raw, int bits_per_pixel) {
-  cv::Mat grey = raw;
-  if (raw.channels() == 3) cv::cvtColor(raw, grey, cv::COLOR_BGR2GRAY);
+  const cv::Mat grey = to_grey(raw);
   const double full_scale =
       raw.depth() == CV_16U ? std::ldexp(1.0, bits_per_pixel) - 1.0 : 255.0;
   cv::Mat out;
@@ -212,8 +219,7 @@ Status Preprocessor::run(const cv::Mat& raw, cv::Mat* out_8u, const Illumination
 
 double illumination_flatness(const cv::Mat& image, int blocks) {
   cv::Mat f;
-  image.convertTo(f, CV_64F);
-  if (f.channels() == 3) cv::cvtColor(f, f, cv::COLOR_BGR2GRAY);
+  to_grey(image).convertTo(f, CV_64F);
   std::vector<double> means;
   for (int by = 0; by < blocks; ++by) {
     for (int bx = 0; bx < blocks; ++bx) {
@@ -230,8 +236,7 @@ double illumination_flatness(const cv::Mat& image, int blocks) {
 
 double mean_local_contrast(const cv::Mat& image, int blocks) {
   cv::Mat f;
-  image.convertTo(f, CV_64F);
-  if (f.channels() == 3) cv::cvtColor(f, f, cv::COLOR_BGR2GRAY);
+  to_grey(image).convertTo(f, CV_64F);
   double sum = 0.0;
   for (int by = 0; by < blocks; ++by) {
     for (int bx = 0; bx < blocks; ++bx) {

@@ -13,8 +13,9 @@
 // Graphics Gems IV, 1994) evens local contrast for the detectors.
 //
 // Inputs: CV_8U, or CV_16U with `bits_per_pixel` significant bits (Mono12 in 16-bit containers
-// is bits_per_pixel = 12; a value above 2^bits - 1 is reported as a wrong depth), 1 or 3
-// channels (colour is converted to grey). Undistortion resamples the image to the ideal pinhole
+// is bits_per_pixel = 12; a value above 2^bits - 1 is reported as a wrong depth), 1, 3 or 4
+// channels (BGR and BGRA, as OpenCV reads colour files, are converted to grey; alpha is
+// ignored). Undistortion resamples the image to the ideal pinhole
 // of the same intrinsics, so feature coordinates measured on the output are ideal pixels.
 
 #include <opencv2/core.hpp>
@@ -44,7 +45,7 @@ struct PreprocessOptions {
   int clahe_tiles = 8;                    ///< CLAHE tiles across the image width.
 };
 
-/// Checks a raw frame before preprocessing: not empty, CV_8U or CV_16U, 1 or 3 channels, size
+/// Checks a raw frame before preprocessing: not empty, CV_8U or CV_16U, 1, 3 or 4 channels, size
 /// equal to the calibration's width x height when that is set, and for CV_16U no value above
 /// 2^bits_per_pixel - 1. The message names the frame's actual and the expected property.
 core::Status validate_raw_frame(const cv::Mat& raw, const CameraIntrinsics& camera,
@@ -54,6 +55,9 @@ core::Status validate_raw_frame(const cv::Mat& raw, const CameraIntrinsics& came
 /// fewer bytes than width x height x bytes per pixel (a truncated frame). bytes_per_pixel 1 or 2.
 core::Status frame_from_buffer(const std::uint8_t* data, std::size_t size_bytes, int width_px,
                                int height_px, int bytes_per_pixel, cv::Mat* frame);
+
+/// The grey of a 1-, 3- (BGR) or 4-channel (BGRA) image, same depth (the image itself if grey).
+cv::Mat to_grey(const cv::Mat& image);
 
 /// Grey frame as CV_32F in [0, 1] (full scale 2^bits - 1 for CV_16U, 255 for CV_8U).
 cv::Mat to_unit_float(const cv::Mat& raw, int bits_per_pixel);
