@@ -196,6 +196,7 @@ void run_register(const RegisterArgs& args) {
     out["descriptor_comparisons"] = r.descriptor_comparisons;
     out["features"] = {features_i.size(), features_j.size()};
     out["reprojection_rms_px"] = r.reprojection_rms_px;
+    out["noise_sigma_px"] = r.noise_sigma_px;
     out["prior_chi2"] = r.prior_chi2;
     out["ms"] = {{"features_i", features_i_ms}, {"features_j", features_j_ms},
                  {"matching", tm.matching_ms},  {"essential", tm.essential_ms},

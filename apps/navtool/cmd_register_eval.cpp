@@ -73,6 +73,7 @@ struct EvalArgs {
   double model_sigma_deg = vision::RegistrationOptions{}.refinement.model_sigma_rad * kDeg;
   double pixel_sigma_px = vision::RegistrationOptions{}.refinement.pixel_sigma_px;
   double residual_sigma_factor = vision::RegistrationOptions{}.refinement.residual_sigma_factor;
+  bool fixed_kink = false;
   int fig4_every = 1;
   bool json = false;
   bool verbose = false;
@@ -347,6 +348,7 @@ void run_register_eval(const EvalArgs& args) {
   options.refinement.model_sigma_rad = args.model_sigma_deg / kDeg;
   vision::set_pixel_sigma_keeping_parallax_floor(options.refinement, args.pixel_sigma_px);
   options.refinement.residual_sigma_factor = args.residual_sigma_factor;
+  options.refinement.kink_at_measured_noise = !args.fixed_kink;
   const vision::Registration registration(dive.camera, options);
   const int n = static_cast<int>(dive.frames.size());
   std::vector<vision::ImageFeatures> features(static_cast<std::size_t>(n));
@@ -469,6 +471,10 @@ void add_register_eval(CLI::App& app) {
                   "multiplier of the fit's a-posteriori pixel sigma in the covariance's "
                   "scaling (two_view_refinement.h; default: registration.h)")
       ->check(CLI::Range(0.1, 10.0));
+  cmd->add_flag("--fixed-kink", args->fixed_kink,
+                "reject the refinement's outliers at a kink of 3 pixel sigmas instead of 3 "
+                "sigmas of the noise measured on the pair where that is larger "
+                "(two_view_refinement.h kink_at_measured_noise)");
   cmd->add_option("--fig4-every", args->fig4_every,
                   "count the Fig. 4 band misses on every k-th pair only (default 1: all)")
       ->check(CLI::Range(1, 1000000));

@@ -48,6 +48,21 @@ double area_fraction(const std::vector<Eigen::Vector2d>& u_px, const CameraIntri
   return 12.0 * std::sqrt(std::max(0.0, second.determinant())) / (width * height);
 }
 
+/// 1.4826 x the median residual norm of a match, in pixels (two_view_refinement.h: one degree
+/// of freedom per match once its point is fitted, so the norm is sigma |N(0, 1)|).
+double robust_sigma_px(const PoseState& x, const std::vector<Eigen::Vector3d>& X,
+                       const std::vector<Eigen::Vector2d>& ui,
+                       const std::vector<Eigen::Vector2d>& uj, const CameraIntrinsics& cam,
+                       double pixel_sigma_px) {
+  const PoseTerms pose(x);
+  std::vector<double> norm_px(X.size());
+  for (std::size_t k = 0; k < X.size(); ++k) {
+    const PointResidual p = point_residual(pose, cam, X[k], ui[k], uj[k], 1.0, false);
+    norm_px[k] = std::hypot(p.r_i.norm(), p.r_j.norm());
+  }
+  return norm_px.empty() ? pixel_sigma_px : 1.4826 * median(norm_px);
+}
+
 }  // namespace
 
 void set_pixel_sigma_keeping_parallax_floor(TwoViewRefinementOptions& options,
@@ -156,7 +171,7 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
   // loss alone converges slowly (their points drift along a flat valley of the cost) and
   // leaves down-weighted terms in the information; after rejection every weight is 1.
   const double inv_sigma = 1.0 / opt.pixel_sigma_px;
-  const double c = opt.huber_threshold_sigma;
+  double c = opt.huber_threshold_sigma;  // whitened; raised to the measured noise after round 0
   const std::size_t n_front = X.size();
   out.initial_rms_px =
       opt.pixel_sigma_px * std::sqrt(stacked_residuals(x, X, ui, uj, cam, inv_sigma).squaredNorm() /
@@ -201,9 +216,15 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
       why << lm.error << "; median parallax " << out.median_parallax_px << " px";
       return fail(out, why.str());
     }
+    const double lm_kink = c;
+    if (round == 0) {
+      out.robust_sigma_px = robust_sigma_px(x, X, ui, uj, cam, opt.pixel_sigma_px);
+      if (opt.kink_at_measured_noise) c *= std::max(1.0, out.robust_sigma_px * inv_sigma);
+    }
     // Keep the matches inside the Huber kink in both images and in front of both cameras
     // (inverse depth rho > 0; a distant point may cross infinity within its noise).
     std::vector<std::size_t> keep;
+    bool kept_beyond_lm_kink = false;  // down-weighted by this round's solve
     const PoseTerms pose(x);
     for (std::size_t k = 0; k < X.size(); ++k) {
       const PointResidual p = point_residual(pose, cam, X[k], ui[k], uj[k], inv_sigma, false);
@@ -215,8 +236,12 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
         ++out.rejected_outliers;
       } else {
         keep.push_back(k);
+        kept_beyond_lm_kink |= std::max(p.r_i.norm(), p.r_j.norm()) > lm_kink;
       }
     }
+    // A kink raised after round 0 keeps matches that round's solve down-weighted: solve again
+    // with unit weights even when nothing was dropped.
+    if (keep.size() == X.size() && kept_beyond_lm_kink) continue;
     if (keep.size() == X.size()) {
       if (lm.converged) break;
       summarise();

@@ -88,6 +88,7 @@ void validate_registration(const TwoViewRefinement& refinement, const RelativePo
   result.covariance = refinement.covariance;
   result.inliers = static_cast<int>(refinement.used_matches.size());
   result.reprojection_rms_px = refinement.reprojection_rms_px;
+  result.noise_sigma_px = refinement.robust_sigma_px;
   result.prior_chi2 = -1.0;
   result.max_leverage = refinement.max_leverage;
   std::ostringstream why;

@@ -272,6 +272,59 @@ TEST(TwoViewRefinement, GrossMismatchesRejected) {
   EXPECT_LT(nees(robust, z_true), 20.5);
 }
 
+// Features three times noisier than the configured sigma (a camera with more pixels per
+// feature scale, a scene that moves): with the kink fixed at 3 configured sigmas good matches
+// are rejected round after round; with the kink at the measured noise they are kept, the noise
+// is measured within its sampling error, and the covariance (scaled by the a-posteriori sigma)
+// is consistent over independent draws.
+TEST(TwoViewRefinement, KinkFollowsTheMeasuredNoise) {
+  constexpr double kTrueSigmaPx = 1.0;
+  TwoViewRefinementOptions o = options();
+  set_pixel_sigma_keeping_parallax_floor(o, 0.3);
+  TwoViewRefinementOptions fixed = o;
+  fixed.kink_at_measured_noise = false;
+
+  std::mt19937 rng(21);
+  const Vec6 x = test::default_x_i_j();
+  const Vec5 z_true = z_from_relative_pose(x);
+  Eigen::Matrix3d R0;
+  Eigen::Vector3d t0;
+  perturbed_initial(x, R0, t0);
+  const test::TwoViewScene s = test::make_scene(rng, x, 150, 3.5, 0.3, kTrueSigmaPx);
+  const TwoViewRefinement with_fixed = refine_two_view(s.u_i, s.u_j, s.camera, R0, t0, fixed);
+  EXPECT_TRUE(!with_fixed.converged || with_fixed.rejected_outliers > 15)
+      << with_fixed.rejected_outliers << " rejected";
+  const TwoViewRefinement r = refine_two_view(s.u_i, s.u_j, s.camera, R0, t0, o);
+  ASSERT_TRUE(r.converged) << r.reason;
+  std::cout << "noise " << kTrueSigmaPx << " px, configured 0.3 px: fixed kink "
+            << (with_fixed.converged ? "kept " + std::to_string(with_fixed.used_matches.size())
+                                     : with_fixed.reason)
+            << "; measured " << r.robust_sigma_px << " px, " << r.used_matches.size() << " kept\n";
+  EXPECT_NEAR(r.robust_sigma_px, kTrueSigmaPx, 0.2 * kTrueSigmaPx);  // sd ~10 % at 150
+  // 3-sigma tails of 150 matches; the covariance scaled by (s_hat / 0.3)^2, s_hat near 1 px.
+  EXPECT_GE(r.used_matches.size(), 147u);
+  EXPECT_GT(r.covariance_scale, 8.0);
+
+  std::normal_distribution<double> noise(0.0, kTrueSigmaPx);
+  const test::TwoViewScene truth = test::make_scene(rng, x, 80, 3.5, 0.3, 0.0);
+  double nees_sum = 0.0, sigma_sum = 0.0;
+  const int trials = 100;
+  for (int trial = 0; trial < trials; ++trial) {
+    std::vector<Eigen::Vector2d> u_i = truth.u_i_true, u_j = truth.u_j_true;
+    for (auto& u : u_i) u += Eigen::Vector2d(noise(rng), noise(rng));
+    for (auto& u : u_j) u += Eigen::Vector2d(noise(rng), noise(rng));
+    const TwoViewRefinement t = refine_two_view(u_i, u_j, truth.camera, R0, t0, o);
+    ASSERT_TRUE(t.converged) << "trial " << trial << ": " << t.reason;
+    nees_sum += nees(t, z_true);
+    sigma_sum += t.robust_sigma_px;
+  }
+  std::cout << "over " << trials << " draws: NEES mean " << nees_sum / trials
+            << ", measured noise mean " << sigma_sum / trials << " px\n";
+  EXPECT_NEAR(sigma_sum / trials, kTrueSigmaPx, 0.05 * kTrueSigmaPx);
+  EXPECT_GT(nees_sum / trials, 4.0);
+  EXPECT_LT(nees_sum / trials, 6.5);
+}
+
 TEST(TwoViewRefinement, TooFewMatchesFail) {
   std::mt19937 rng(5);
   const Vec6 x = test::default_x_i_j();

@@ -111,6 +111,8 @@ struct RegistrationResult {
   int inliers = 0;
   std::size_t descriptor_comparisons = 0;
   double reprojection_rms_px = 0.0;
+  /// Feature noise measured on the pair (TwoViewRefinement::robust_sigma_px).
+  double noise_sigma_px = 0.0;
   double prior_chi2 = -1.0;  ///< chi2(5) of z against the prior's prediction; -1 without prior.
   double max_leverage = 0.0;  ///< largest leverage of one inlier (TwoViewRefinement)
 };
