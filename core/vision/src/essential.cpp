@@ -25,6 +25,10 @@ struct Candidate {
   Eigen::Vector3d t = Eigen::Vector3d::Zero();
   int in_front = 0;
   double parallax_median_rad = 0.0;
+  double sampson_median = 0.0;  ///< median |Sampson distance| over the inliers, normalised
+  /// Angle between camera i's optical axis and the normal of the plane fitted to the inliers
+  /// triangulated in front (pi/2 when fewer than 3).
+  double floor_tilt_rad = M_PI / 2.0;
 };
 
 int cv_method(RobustMethod method) {
@@ -41,27 +45,108 @@ int cv_method(RobustMethod method) {
 
 Eigen::Vector3d bearing(const Eigen::Vector2d& x) { return {x.x(), x.y(), 1.0}; }
 
-/// Cheirality count and median parallax of a candidate over the inliers.
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+/// Angle between the z axis and the normal of the least-squares plane through the points.
+double plane_tilt_rad(const std::vector<Eigen::Vector3d>& points) {
+  if (points.size() < 3) return M_PI / 2.0;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : points) mean += p;
+  mean /= static_cast<double>(points.size());
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const auto& p : points) scatter += (p - mean) * (p - mean).transpose();
+  // The normal is the direction of least spread: the first eigenvector (ascending order).
+  const Eigen::Vector3d normal =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter).eigenvectors().col(0);
+  return std::acos(std::min(1.0, std::abs(normal.z())));
+}
+
+/// Cheirality count, median parallax, median Sampson distance and floor tilt of a candidate
+/// over the inliers.
 void score(Candidate& c, const std::vector<Eigen::Vector2d>& xi,
            const std::vector<Eigen::Vector2d>& xj, const std::vector<int>& inliers) {
   c.in_front = 0;
-  std::vector<double> parallax;
+  std::vector<double> parallax, sampson;
+  std::vector<Eigen::Vector3d> points_i;
   parallax.reserve(inliers.size());
+  const Eigen::Matrix3d E = core::skew(c.t) * c.R;
   for (int k : inliers) {
     const auto sk = static_cast<std::size_t>(k);
     double di = 0.0, dj = 0.0;
     if (triangulate_depths(c.R, c.t, xi[sk], xj[sk], &di, &dj) && di > 0.0 && dj > 0.0) {
       ++c.in_front;
+      points_i.push_back(di * bearing(xi[sk]));
     }
     const Eigen::Vector3d a = bearing(xi[sk]).normalized();
     const Eigen::Vector3d b = (c.R * bearing(xj[sk])).normalized();
     parallax.push_back(std::atan2(a.cross(b).norm(), a.dot(b)));
+    sampson.push_back(std::abs(sampson_distance(E, xi[sk], xj[sk])));
   }
-  if (!parallax.empty()) {
-    auto mid = parallax.begin() + static_cast<std::ptrdiff_t>(parallax.size() / 2);
-    std::nth_element(parallax.begin(), mid, parallax.end());
-    c.parallax_median_rad = *mid;
+  c.parallax_median_rad = median(std::move(parallax));
+  c.sampson_median = median(std::move(sampson));
+  c.floor_tilt_rad = plane_tilt_rad(points_i);
+}
+
+constexpr double kTwinRotationRad = 2.0 * M_PI / 180.0;
+constexpr double kTwinBaselineRad = 30.0 * M_PI / 180.0;
+constexpr double kSameFloorRad = 5.0 * M_PI / 180.0;
+
+double angle_between(const Candidate& a, const Candidate& b) {
+  return Eigen::AngleAxisd(a.R.transpose() * b.R).angle();
+}
+
+/// Without a prior (essential.h): among the candidates that put as many points in front as the
+/// best and fit the matches as well, the one whose points lie on the least tilted floor; an
+/// error message when another pose fits as well and the floor cannot tell them apart.
+const Candidate* choose_without_prior(const std::vector<Candidate>& candidates, int best_count,
+                                      double focal, const EssentialOptions& o, std::string* why) {
+  std::vector<const Candidate*> tied;
+  double best_sampson = std::numeric_limits<double>::max();
+  for (const Candidate& c : candidates) {
+    if (c.in_front < o.ambiguity_ratio * best_count) continue;
+    tied.push_back(&c);
+    best_sampson = std::min(best_sampson, c.sampson_median);
   }
+  const double fit_limit = 2.0 * best_sampson + o.min_sigma_px / focal;
+  std::vector<const Candidate*> fits;
+  for (const Candidate* c : tied) {
+    if (c->sampson_median <= fit_limit) fits.push_back(c);
+  }
+  const auto flattest = *std::min_element(fits.begin(), fits.end(), [](auto* a, auto* b) {
+    return a->floor_tilt_rad < b->floor_tilt_rad;
+  });
+  // Without parallax no pose is defined and the parallax test that follows says so.
+  if (flattest->parallax_median_rad * focal < o.min_parallax_px) return flattest;
+  const double max_tilt = o.floor_max_tilt_deg * M_PI / 180.0;
+  const double min_gap = o.floor_min_tilt_gap_deg * M_PI / 180.0;
+  for (const Candidate* c : fits) {
+    // Seeds of one reconstruction differ by noise (most in the baseline of a short one) and
+    // see the same floor; a planar twin turns the camera by about the baseline-to-depth angle
+    // and tilts the floor by the baseline's angle to the floor's normal.
+    const double baseline_apart = std::acos(std::clamp(c->t.dot(flattest->t), -1.0, 1.0));
+    const bool twin =
+        (angle_between(*c, *flattest) > kTwinRotationRad || baseline_apart > kTwinBaselineRad) &&
+        c->floor_tilt_rad > flattest->floor_tilt_rad + kSameFloorRad;
+    if (!twin || (flattest->floor_tilt_rad <= max_tilt &&
+                  c->floor_tilt_rad >= flattest->floor_tilt_rad + min_gap)) {
+      continue;
+    }
+    *why = "essential: planar ambiguity without a prior: two poses " +
+           std::to_string(angle_between(*c, *flattest) * 180.0 / M_PI) + " deg (baselines " +
+           std::to_string(baseline_apart * 180.0 / M_PI) +
+           " deg) apart fit the matches equally, their floors tilted " +
+           std::to_string(flattest->floor_tilt_rad * 180.0 / M_PI) + " and " +
+           std::to_string(c->floor_tilt_rad * 180.0 / M_PI) + " deg (a floor is tilted at most " +
+           std::to_string(o.floor_max_tilt_deg) + " deg and " +
+           std::to_string(o.floor_min_tilt_gap_deg) + " deg less than any other)";
+    return nullptr;
+  }
+  return flattest;
 }
 
 /// Orthonormal basis of the plane orthogonal to the unit vector t.
@@ -237,7 +322,7 @@ EssentialEstimate estimate_essential(const ImageFeatures& features_i,
       candidates.push_back(c);
     }
   }
-  if (options.planar_candidates && prior != nullptr && out.inliers.size() >= 4) {
+  if (options.planar_candidates && out.inliers.size() >= 4) {
     std::vector<cv::Point2d> hi, hj;
     for (int k : out.inliers) {
       hi.push_back(pi[static_cast<std::size_t>(k)]);
@@ -286,21 +371,22 @@ EssentialEstimate estimate_essential(const ImageFeatures& features_i,
   const Candidate* chosen = nullptr;
   double chosen_key = 0.0;
   for (const Candidate& c : candidates) {
-    if (c.in_front < options.ambiguity_ratio * best_count) continue;
-    // Without a prior: most points in front. With a prior: nearest the prediction.
-    // A candidate whose baseline is along the optical axis has no azimuth: last resort only.
-    double key = -static_cast<double>(c.in_front);
-    if (use_prior) {
-      try {
-        key = prior_distance2(c);
-      } catch (const std::domain_error&) {
-        key = std::numeric_limits<double>::max();
-      }
+    if (!use_prior || c.in_front < options.ambiguity_ratio * best_count) continue;
+    // With a prior: nearest the prediction. A candidate whose baseline is along the optical
+    // axis has no azimuth: last resort only.
+    double key = std::numeric_limits<double>::max();
+    try {
+      key = prior_distance2(c);
+    } catch (const std::domain_error&) {
     }
     if (chosen == nullptr || key < chosen_key) {
       chosen = &c;
       chosen_key = key;
     }
+  }
+  if (!use_prior) {
+    chosen = choose_without_prior(candidates, best_count, focal, options, &out.reason);
+    if (chosen == nullptr) return out;
   }
   if (chosen->parallax_median_rad * focal < options.min_parallax_px) {
     out.reason = "essential: median parallax " + std::to_string(chosen->parallax_median_rad * focal) +

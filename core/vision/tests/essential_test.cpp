@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdio>
 #include <opencv2/calib3d.hpp>
 #include <random>
 #include <vector>
@@ -170,6 +171,99 @@ TEST(Essential, PlanarSceneFollowsThePriorToTheOtherPlanarSolution) {
     EXPECT_LT(angle_deg(e.R_i_j, Rk), 0.5);
   }
   EXPECT_TRUE(found_other) << "no second physical homography decomposition";
+}
+
+/// A flat plane through [0 0 depth] in camera i, its normal tilted `tilt_deg` about camera i's
+/// x axis, seen by camera j at (R, t) with 0.3 px noise.
+Scene plane_scene(const Eigen::Matrix3d& R, const Eigen::Vector3d& t, double tilt_deg, int n,
+                  unsigned seed) {
+  const double slope = std::tan(tilt_deg * M_PI / 180.0);  // depth change per metre of y
+  Scene s = make_scene(R, t, 3.0, 0.0, 0.3, 0.0, n, seed);
+  // Re-project every point of the flat floor onto the tilted plane along camera i's ray.
+  std::mt19937 rng(seed + 1000);
+  std::normal_distribution<double> noise(0.0, 0.3);
+  const CameraIntrinsics cam = test::sim_camera();
+  Scene out;
+  for (const Eigen::Vector2d& u : s.i.points_px) {
+    const Eigen::Vector2d x = normalised_from_pixel(cam, u);
+    const double depth = 3.0 / (1.0 - slope * x.y());  // z = 3 + slope y on the ray z [x y 1]
+    if (!(depth > 0.5) || depth > 30.0) continue;
+    const Eigen::Vector3d p_j = R.transpose() * (depth * Eigen::Vector3d(x.x(), x.y(), 1.0) - t);
+    if (p_j.z() <= 0.1) continue;
+    const int k = static_cast<int>(out.i.points_px.size());
+    out.i.points_px.push_back(u);
+    out.j.points_px.push_back(pixel_from_normalised(cam, p_j.head<2>() / p_j.z()) +
+                              Eigen::Vector2d(noise(rng), noise(rng)));
+    out.matches.matches.push_back({k, k, 0.0f});
+  }
+  return out;
+}
+
+TEST(Essential, FlatFloorWithoutPriorPicksTheFloorNotItsPlanarTwin) {
+  // A survey's motions over a flat floor: along the line, across to the next line flown back,
+  // a turn. Both planar solutions put every point in front and fit the matches exactly; the
+  // twin's floor stands at about 90 deg. Without a prior the floor decides.
+  const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> motions = {
+      {{0.0, 0.0, 0.05}, {0.6, 0.0, 0.0}},
+      {{0.02, -0.01, M_PI}, {0.0, 0.7, 0.05}},
+      {{0.0, 0.03, M_PI / 2}, {0.4, 0.4, -0.1}}};
+  unsigned seed = 40;
+  for (const auto& [rpy, t] : motions) {
+    const Eigen::Matrix3d R = core::rotation_from_euler(rpy);
+    const Scene s = plane_scene(R, t, 0.0, 200, ++seed);
+    const EssentialEstimate e =
+        estimate_essential(s.i, s.j, s.matches, test::sim_camera(), {}, nullptr);
+    ASSERT_TRUE(e.ok) << "heading " << rpy.z() << ": " << e.reason;
+    EXPECT_LT(angle_deg(e.R_i_j, R), 0.3) << "heading " << rpy.z();
+    EXPECT_GT(e.t_i_j_unit.dot(t.normalized()), std::cos(2.0 * M_PI / 180.0))
+        << "heading " << rpy.z();
+  }
+}
+
+TEST(Essential, ClimbingOverAFlatFloorTheTwinTiesAndTheFloorDecides) {
+  // Forward 0.5 m while climbing 0.6 m over a floor 3 m down: the planar twin puts as many
+  // points in front and fits as well, its floor tilted about 35 deg. The floor test decides;
+  // with floor_max_tilt_deg 0 (no floor trusted) the pair fails as ambiguous.
+  const Eigen::Matrix3d R = core::rotation_from_euler(Eigen::Vector3d(0.0, 0.0, 0.1));
+  const Eigen::Vector3d t(0.5, 0.0, -0.6);
+  const Scene s = plane_scene(R, t, 0.0, 200, 8);
+  const EssentialEstimate e =
+      estimate_essential(s.i, s.j, s.matches, test::sim_camera(), {}, nullptr);
+  ASSERT_TRUE(e.ok) << e.reason;
+  EXPECT_LT(angle_deg(e.R_i_j, R), 0.3);
+  EXPECT_GT(e.t_i_j_unit.dot(t.normalized()), std::cos(2.0 * M_PI / 180.0));
+  EssentialOptions no_floor;
+  no_floor.floor_max_tilt_deg = 0.0;
+  const EssentialEstimate refused =
+      estimate_essential(s.i, s.j, s.matches, test::sim_camera(), no_floor, nullptr);
+  EXPECT_FALSE(refused.ok);
+  EXPECT_NE(refused.reason.find("planar ambiguity"), std::string::npos) << refused.reason;
+}
+
+TEST(Essential, TiltedPlanesWithoutPriorGiveTheTruthOrAnAmbiguity) {
+  // Slopes up to a wall: the answer is the truth or a failure that says why, never the twin.
+  int right = 0, ambiguous = 0;
+  unsigned seed = 60;
+  for (const double tilt_deg : {20.0, 40.0, 55.0, 70.0}) {
+    for (const Eigen::Vector3d& t :
+         {Eigen::Vector3d(0.6, 0.0, 0.0), Eigen::Vector3d(0.0, 0.6, 0.1)}) {
+      const Eigen::Matrix3d R = core::rotation_from_euler(Eigen::Vector3d(0.0, 0.02, 0.3));
+      const Scene s = plane_scene(R, t, tilt_deg, 200, ++seed);
+      const EssentialEstimate e =
+          estimate_essential(s.i, s.j, s.matches, test::sim_camera(), {}, nullptr);
+      if (!e.ok) {
+        EXPECT_NE(e.reason.find("planar ambiguity"), std::string::npos) << e.reason;
+        ++ambiguous;
+        continue;
+      }
+      EXPECT_LT(angle_deg(e.R_i_j, R), 0.3) << "tilt " << tilt_deg << ", t " << t.transpose();
+      EXPECT_GT(e.t_i_j_unit.dot(t.normalized()), std::cos(2.0 * M_PI / 180.0))
+          << "tilt " << tilt_deg << ", t " << t.transpose();
+      ++right;
+    }
+  }
+  std::printf("tilted planes: %d right, %d ambiguous of 8\n", right, ambiguous);
+  EXPECT_GE(right, 4);
 }
 
 }  // namespace

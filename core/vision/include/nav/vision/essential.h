@@ -10,11 +10,22 @@
 //
 // Decomposition: E has four (R, t) decompositions (Hartley & Zisserman, 2nd ed., result 9.19).
 // Each is scored by cheirality, the number of inliers triangulated in front of both cameras.
-// Over a near-planar seafloor, the planar homography's decompositions (Faugeras & Lustman,
-// 1988; Malis & Vargas, INRIA RR-6303, 2007) are also consistent with the points; all
-// candidates whose cheirality count is within `ambiguity_ratio` of the best are ambiguous, and
-// with a prior the one nearest the prior's predicted 5-DOF measurement in Mahalanobis distance
-// is chosen; without a prior, the best cheirality count.
+// Over a near-planar seafloor the homography's decompositions (Faugeras & Lustman, 1988; Malis
+// & Vargas, INRIA RR-6303, 2007) are candidates too: over a plane the 5-point solution inside
+// LMedS may be either of the two poses that explain the matches, the true one or its planar
+// twin, in which the plane's normal and the baseline roughly trade places (Longuet-Higgins,
+// "The reconstruction of a plane surface from two perspective projections", Proc. R. Soc.
+// Lond. B 227, 1986). Candidates whose cheirality count is within `ambiguity_ratio` of the best
+// are ambiguous. With a prior, the one nearest the prior's predicted 5-DOF measurement in
+// Mahalanobis distance is chosen. Without one, the ambiguous candidates that also fit the
+// matches as well as the best (median Sampson distance within twice the best plus
+// min_sigma_px) are told apart by the scene: under the true pose of a down-looking camera the
+// inliers lie on a floor roughly across the optical axis, under the twin on a plane tilted by
+// about the baseline's angle to the floor's normal. The candidate whose least-squares plane is
+// least tilted is chosen when its tilt is at most `floor_max_tilt_deg` and every twin is
+// tilted `floor_min_tilt_gap_deg` more; otherwise the pair fails as a planar ambiguity. A twin
+// is a candidate at least 2 deg of rotation or 30 deg of baseline away whose floor is tilted
+// over 5 deg more; closer candidates are seeds of the same reconstruction.
 // The chosen pose is polished on the inliers by Gauss-Newton on the Sampson error (first-order
 // geometric error; Hartley & Zisserman, 2nd ed., section 11.4.3), parametrised minimally as
 // R <- R exp([w]x), t <- normalise(t + B b) with B a basis of t's tangent plane (5 DOF).
@@ -46,6 +57,10 @@ struct EssentialOptions {
   double min_parallax_px = 0.25;  ///< Median derotated inlier parallax below this (pixels at
                                   ///< the mean focal length): pure rotation.
   bool planar_candidates = true;    ///< Add the homography decompositions as candidates.
+  /// Without a prior, the largest tilt of the scene's plane from the optical axis that the
+  /// planar ambiguity may be resolved with (above); 0: every ambiguity fails.
+  double floor_max_tilt_deg = 45.0;
+  double floor_min_tilt_gap_deg = 20.0;  ///< ... and the least tilt of the other poses over it.
   int polish_iterations = 10;       ///< Sampson-error Gauss-Newton steps on the inliers (0: off).
   int polish_rounds = 3;            ///< Polish, re-select inliers, repeat.
   double inlier_k_sigma = 2.5;      ///< Re-selection gate in robust sigmas of the Sampson error.
