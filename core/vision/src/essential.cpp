@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "median.h"
 #include "nav/core/geometry/rotation.h"
 #include "nav/vision/camera_model.h"
 #include "nav/vision/relative_pose_5dof.h"
@@ -19,6 +20,8 @@
 namespace nav::vision {
 
 namespace {
+
+using detail::median;
 
 struct Candidate {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
@@ -44,13 +47,6 @@ int cv_method(RobustMethod method) {
 }
 
 Eigen::Vector3d bearing(const Eigen::Vector2d& x) { return {x.x(), x.y(), 1.0}; }
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
 
 /// Angle between the z axis and the normal of the least-squares plane through the points.
 double plane_tilt_rad(const std::vector<Eigen::Vector3d>& points) {

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "median.h"
 #include "nav/core/geometry/rotation.h"
 #include "nav/vision/relative_pose_5dof.h"
 #include "two_view_problem.h"
@@ -28,10 +29,7 @@ TwoViewRefinement fail(TwoViewRefinement out, const std::string& reason,
   return out;
 }
 
-double median(std::vector<double> v) {
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
+using detail::median;
 
 /// 12 sqrt(det(second moment of the points)) / frame area (two_view_refinement.h).
 double area_fraction(const std::vector<Eigen::Vector2d>& u_px, const CameraIntrinsics& cam) {
@@ -48,19 +46,13 @@ double area_fraction(const std::vector<Eigen::Vector2d>& u_px, const CameraIntri
   return 12.0 * std::sqrt(std::max(0.0, second.determinant())) / (width * height);
 }
 
-/// 1.4826 x the median residual norm of a match, in pixels (two_view_refinement.h: one degree
-/// of freedom per match once its point is fitted, so the norm is sigma |N(0, 1)|).
-double robust_sigma_px(const PoseState& x, const std::vector<Eigen::Vector3d>& X,
-                       const std::vector<Eigen::Vector2d>& ui,
-                       const std::vector<Eigen::Vector2d>& uj, const CameraIntrinsics& cam,
-                       double pixel_sigma_px) {
-  const PoseTerms pose(x);
-  std::vector<double> norm_px(X.size());
-  for (std::size_t k = 0; k < X.size(); ++k) {
-    const PointResidual p = point_residual(pose, cam, X[k], ui[k], uj[k], 1.0, false);
-    norm_px[k] = std::hypot(p.r_i.norm(), p.r_j.norm());
-  }
-  return norm_px.empty() ? pixel_sigma_px : 1.4826 * median(norm_px);
+/// 1.4826 x the median residual norm of a match, in pixels, from each match's whitened
+/// residual norms [|r_i|, |r_j|] (two_view_refinement.h: one degree of freedom per match once
+/// its point is fitted, so the norm is sigma |N(0, 1)|).
+double robust_sigma_px(const std::vector<Eigen::Vector2d>& whitened_norms, double pixel_sigma_px) {
+  std::vector<double> norm(whitened_norms.size());
+  for (std::size_t k = 0; k < norm.size(); ++k) norm[k] = whitened_norms[k].norm();
+  return norm.empty() ? pixel_sigma_px : 1.4826 * pixel_sigma_px * median(norm);
 }
 
 }  // namespace
@@ -216,27 +208,32 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
       why << lm.error << "; median parallax " << out.median_parallax_px << " px";
       return fail(out, why.str());
     }
+    // Each match's whitened residual norms in image i and j at this round's solution.
+    const PoseTerms pose(x);
+    std::vector<Eigen::Vector2d> norms(X.size());
+    for (std::size_t k = 0; k < X.size(); ++k) {
+      const PointResidual p = point_residual(pose, cam, X[k], ui[k], uj[k], inv_sigma, false);
+      norms[k] << p.r_i.norm(), p.r_j.norm();
+    }
     const double lm_kink = c;
     if (round == 0) {
-      out.robust_sigma_px = robust_sigma_px(x, X, ui, uj, cam, opt.pixel_sigma_px);
+      out.robust_sigma_px = robust_sigma_px(norms, opt.pixel_sigma_px);
       if (opt.kink_at_measured_noise) c *= std::max(1.0, out.robust_sigma_px * inv_sigma);
     }
     // Keep the matches inside the Huber kink in both images and in front of both cameras
     // (inverse depth rho > 0; a distant point may cross infinity within its noise).
     std::vector<std::size_t> keep;
     bool kept_beyond_lm_kink = false;  // down-weighted by this round's solve
-    const PoseTerms pose(x);
     for (std::size_t k = 0; k < X.size(); ++k) {
-      const PointResidual p = point_residual(pose, cam, X[k], ui[k], uj[k], inv_sigma, false);
       const double rho = X[k].z();
       const Eigen::Vector3d m(X[k].x(), X[k].y(), 1.0);
       if (!(rho > 0.0) || !((pose.R_j_i * (m - rho * pose.t)).z() > 0.0)) {
         ++out.behind_camera;
-      } else if (std::max(p.r_i.norm(), p.r_j.norm()) > c) {
+      } else if (norms[k].maxCoeff() > c) {
         ++out.rejected_outliers;
       } else {
         keep.push_back(k);
-        kept_beyond_lm_kink |= std::max(p.r_i.norm(), p.r_j.norm()) > lm_kink;
+        kept_beyond_lm_kink |= norms[k].maxCoeff() > lm_kink;
       }
     }
     // A kink raised after round 0 keeps matches that round's solve down-weighted: solve again

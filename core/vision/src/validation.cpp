@@ -10,22 +10,19 @@
 #include <stdexcept>
 #include <vector>
 
+#include "median.h"
 #include "nav/vision/relative_pose_5dof.h"
 
 namespace nav::vision {
 namespace {
+
+using detail::median;
 
 void set_failure(RegistrationResult& result, RegistrationFailure failure,
                  const std::string& reason) {
   result.success = false;
   result.failure = failure;
   result.reason = reason;
-}
-
-double median(std::vector<double> v) {
-  const auto mid = v.begin() + static_cast<long>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
 }
 
 }  // namespace
