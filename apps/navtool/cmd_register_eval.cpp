@@ -7,7 +7,7 @@
 //   navtool register-eval DIVE [--frames N] [--min-overlap F] [--flat-overlap]
 //                          [--min-relative-return R] [--overlap-of-footprint] [--threads T]
 //                          [--reliability DELTA0] [--max-leverage H] [--pixel-sigma-px S]
-//                          [--model-sigma-deg D] [--json]
+//                          [--model-sigma-deg D] [--systematic-noise-fraction F] [--json]
 //                          [--draw OUT.png] [--draw-scale S]
 // --json prints one object: frames, min_overlap, overlap ("visible" or "flat"),
 // min_relative_return, overlap_of ("image" or "footprint"), pairs,
@@ -73,6 +73,7 @@ struct EvalArgs {
   double model_sigma_deg = vision::RegistrationOptions{}.refinement.model_sigma_rad * kDeg;
   double pixel_sigma_px = vision::RegistrationOptions{}.refinement.pixel_sigma_px;
   double residual_sigma_factor = vision::RegistrationOptions{}.refinement.residual_sigma_factor;
+  double systematic_fraction = vision::RegistrationOptions{}.refinement.systematic_noise_fraction;
   bool fixed_kink = false;
   int fig4_every = 1;
   bool json = false;
@@ -348,6 +349,7 @@ void run_register_eval(const EvalArgs& args) {
   options.refinement.model_sigma_rad = args.model_sigma_deg / kDeg;
   vision::set_pixel_sigma_keeping_parallax_floor(options.refinement, args.pixel_sigma_px);
   options.refinement.residual_sigma_factor = args.residual_sigma_factor;
+  options.refinement.systematic_noise_fraction = args.systematic_fraction;
   options.refinement.kink_at_measured_noise = !args.fixed_kink;
   const vision::Registration registration(dive.camera, options);
   const int n = static_cast<int>(dive.frames.size());
@@ -462,6 +464,9 @@ void add_register_eval(CLI::App& app) {
   cmd->add_option("--model-sigma-deg", args->model_sigma_deg,
                   "model error added to every covariance, deg per angle (default: "
                   "registration.h)")
+      ->check(CLI::Range(0.0, 10.0));
+  cmd->add_option("--systematic-noise-fraction", args->systematic_fraction,
+                  "systematic displacement field, fraction of the measured noise (registration.h)")
       ->check(CLI::Range(0.0, 10.0));
   cmd->add_option("--pixel-sigma-px", args->pixel_sigma_px,
                   "feature noise of the two-view refinement, px, and the floor of its "

@@ -196,20 +196,21 @@ bool schur(const NormalEquations& ne, double lambda, Mat5& S, Vec5& b,
   return S.allFinite() && b.allFinite();
 }
 
-std::vector<Vec5> point_information(const PoseState& x, const std::vector<Eigen::Vector3d>& X,
-                                    const std::vector<Eigen::Vector2d>& u_i,
-                                    const std::vector<Eigen::Vector2d>& u_j,
-                                    const CameraIntrinsics& cam, double inv_sigma) {
+std::vector<PointInformation> point_information(const PoseState& x,
+                                                const std::vector<Eigen::Vector3d>& X,
+                                                const std::vector<Eigen::Vector2d>& u_i,
+                                                const std::vector<Eigen::Vector2d>& u_j,
+                                                const CameraIntrinsics& cam, double inv_sigma) {
   const PoseTerms pose(x);
-  std::vector<Vec5> out(X.size());
+  std::vector<PointInformation> out(X.size());
   for (std::size_t k = 0; k < X.size(); ++k) {
     const PointResidual p = point_residual(pose, cam, X[k], u_i[k], u_j[k], inv_sigma, true);
     Eigen::Matrix<double, 4, 3> J_p;
     J_p << p.J_i_p, p.J_j_p;
     // q: the residual direction the point's own 3 unknowns cannot absorb.
     const Eigen::JacobiSVD<Eigen::Matrix<double, 4, 3>> svd(J_p, Eigen::ComputeFullU);
-    const Eigen::Vector4d q = svd.matrixU().col(3);
-    out[k] = p.J_j_z.transpose() * q.tail<2>();
+    out[k].q = svd.matrixU().col(3);
+    out[k].a = p.J_j_z.transpose() * out[k].q.tail<2>();
   }
   return out;
 }
@@ -236,18 +237,21 @@ double group_shift(const Eigen::MatrixXd& A, const Mat5& C) {
   return (lambda / (1.0 - lambda).max(1e-9)).maxCoeff();
 }
 
-Eigen::MatrixXd columns(const std::vector<Vec5>& a, const std::vector<std::size_t>& group) {
+Eigen::MatrixXd columns(const std::vector<PointInformation>& a,
+                        const std::vector<std::size_t>& group) {
   Eigen::MatrixXd A(5, static_cast<Eigen::Index>(group.size()));
-  for (std::size_t g = 0; g < group.size(); ++g) A.col(static_cast<Eigen::Index>(g)) = a[group[g]];
+  for (std::size_t g = 0; g < group.size(); ++g)
+    A.col(static_cast<Eigen::Index>(g)) = a[group[g]].a;
   return A;
 }
 
 }  // namespace
 
-ReliabilityBound reliability_bound(const std::vector<Vec5>& a, const Mat5& C, double delta0,
-                                   int max_group) {
+ReliabilityBound reliability_bound(const std::vector<PointInformation>& a, const Mat5& C,
+                                   double delta0, int max_group) {
   ReliabilityBound out;
-  for (const Vec5& a_k : a) out.max_leverage = std::max(out.max_leverage, a_k.dot(C * a_k));
+  for (const PointInformation& p : a)
+    out.max_leverage = std::max(out.max_leverage, p.a.dot(C * p.a));
   if (!(delta0 > 0.0)) return out;
   double size = 0.0;
   while (static_cast<int>(out.group.size()) < max_group && out.group.size() < a.size()) {

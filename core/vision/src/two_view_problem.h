@@ -85,11 +85,29 @@ bool schur(const NormalEquations& ne, double lambda, Mat5& S, Vec5& b,
 /// rank one (4 residuals, 3 point unknowns), a_k = J_z^T q_k with q_k the unit residual
 /// direction orthogonal to the point Jacobian's columns. Its leverage h_k = a_k^T S^-1 a_k
 /// (sum_k h_k = 5) is the hat-matrix diagonal of regression (Hoaglin & Welsch, Am. Stat.
-/// 32(1), 1978): near 1, the point decides a direction of the pose alone.
-std::vector<Vec5> point_information(const PoseState& x, const std::vector<Eigen::Vector3d>& p,
-                                    const std::vector<Eigen::Vector2d>& u_i,
-                                    const std::vector<Eigen::Vector2d>& u_j,
-                                    const CameraIntrinsics& cam, double inv_sigma);
+/// 32(1), 1978): near 1, the point decides a direction of the pose alone. A whitened residual
+/// perturbation dr_k moves the solution's pose by S^-1 sum_k a_k q_k^T dr_k (to first order).
+struct PointInformation {
+  Vec5 a;
+  Eigen::Vector4d q;  ///< [image i (2); image j (2)], whitened residual space
+};
+std::vector<PointInformation> point_information(const PoseState& x,
+                                                const std::vector<Eigen::Vector3d>& p,
+                                                const std::vector<Eigen::Vector2d>& u_i,
+                                                const std::vector<Eigen::Vector2d>& u_j,
+                                                const CameraIntrinsics& cam, double inv_sigma);
+
+/// Consider covariance (Schmidt; Bierman, "Factorization methods for discrete sequential
+/// estimation", 1977, section VI.2) of the pose, in the solver's delta, for systematic feature
+/// displacements: in each image a smooth field d(u) = Phi(u) b, Phi the quadratic monomials
+/// 1, x, y, x^2, xy, y^2 per axis in the image's points centred on the principal point and
+/// scaled by their largest offset along each axis, with independent coefficients of sigma_px each.
+/// = sigma_px^2 C F F^T C, F = inv_sigma sum_k a_k q_k^T blockdiag(Phi(u_i,k), Phi(u_j,k)).
+Mat5 systematic_field_covariance(const std::vector<PointInformation>& info,
+                                 const std::vector<Eigen::Vector2d>& u_i,
+                                 const std::vector<Eigen::Vector2d>& u_j,
+                                 const CameraIntrinsics& cam, double inv_sigma, const Mat5& C,
+                                 double sigma_px);
 
 /// Baarda's external reliability (Foerstner, "Reliability analysis of parameter estimation in
 /// linear models with applications to mensuration problems in computer vision", CVGIP 40(3),
@@ -104,8 +122,8 @@ struct ReliabilityBound {
   std::vector<std::size_t> group;  ///< G, indices into a.
   double max_leverage = 0.0;       ///< max_k a_k^T C a_k.
 };
-ReliabilityBound reliability_bound(const std::vector<Vec5>& a, const Mat5& C, double delta0,
-                                   int max_group);
+ReliabilityBound reliability_bound(const std::vector<PointInformation>& info, const Mat5& C,
+                                   double delta0, int max_group);
 
 /// Result of one Levenberg-Marquardt run.
 struct LmOutcome {

@@ -44,12 +44,15 @@ struct RegistrationOptions {
   /// shows in the 5x5 covariance instead of a rejection. The covariance's noise model is
   /// calibrated against rendered truth: pixel sigma 0.3 px, scaled by 1.9 x the fit's own
   /// residual sigma where that is larger, no model error (docs/performance.md "An honest
-  /// registration covariance"). navd's closed loop sets its own, more conservative one
+  /// registration covariance"), plus systematic displacements as large as the measured noise
+  /// (dark, noisy frames of weak texture: docs/performance.md "Real imagery beyond the frames in
+  /// data/images"). navd's closed loop sets its own, more conservative one
   /// (nav/daemon/config/vision_config.h).
   TwoViewRefinementOptions refinement = [] {
     TwoViewRefinementOptions o;
     o.pixel_sigma_px = 0.3;
     o.residual_sigma_factor = 1.9;
+    o.systematic_noise_fraction = 1.0;
     o.min_parallax_sigma = EssentialOptions{}.min_parallax_px / o.pixel_sigma_px;
     return o;
   }();

@@ -56,6 +56,11 @@
 // Errors common to all matches (camera calibration, feature-localisation biases that do not
 // average out over the matches) bound how well any direction of z is known however many matches
 // there are; model_sigma_rad adds them as model_sigma_rad^2 I (z's five angles, radians).
+// systematic_*: the same errors as a smooth displacement field in each image (quadratic in the
+// pixel position, sigma = systematic_sigma_px + systematic_noise_fraction x s_robust per
+// coefficient), added as a consider covariance: it grows along the directions of z that such a
+// field moves, e.g. roll against sideways motion over a flat floor, where the Huber-weighted
+// residuals cannot see it (two_view_problem.h systematic_field_covariance).
 //
 // Failures (converged == false, `reason` says why and with which numbers): fewer than
 // min_points usable matches; too many matches triangulating behind either camera; median
@@ -103,6 +108,11 @@ struct TwoViewRefinementOptions {
   /// Model error of z added to the covariance as sigma^2 I, rad (0: none; its choice:
   /// docs/performance.md, "Vision in the loop").
   double model_sigma_rad = 0.0;
+  /// Systematic displacement field's sigma per coefficient, px, and its part proportional to
+  /// the measured noise s_robust (0 and 0: none; the choice: docs/performance.md "Systematic
+  /// displacements at low signal-to-noise").
+  double systematic_sigma_px = 0.0;
+  double systematic_noise_fraction = 0.0;
 };
 
 /// Sets options.pixel_sigma_px and rescales min_parallax_sigma so that the pure-rotation floor
@@ -120,10 +130,11 @@ struct TwoViewRefinement {
   RegistrationFailure failure = RegistrationFailure::kOk;
   Vec5 z = Vec5::Zero();  ///< As nav::core::CameraRelativePoseModel measures it.
   /// 5x5 covariance of z, points marginalised: information_covariance + reliability_covariance
-  /// + model_sigma_rad^2 I.
+  /// + systematic_covariance + model_sigma_rad^2 I.
   Mat5 covariance = Mat5::Identity();
   Mat5 information_covariance = Mat5::Identity();  ///< s_f C (see above)
   Mat5 reliability_covariance = Mat5::Zero();      ///< s_f delta0^2 C A_G (...) A_G^T C
+  Mat5 systematic_covariance = Mat5::Zero();       ///< the displacement field's (above)
   std::vector<int> reliability_matches;            ///< G, as indices like used_matches
   Eigen::Matrix3d R_i_j = Eigen::Matrix3d::Identity();
   Eigen::Vector3d t_i_j_unit = Eigen::Vector3d::UnitX();
