@@ -33,6 +33,7 @@ vision:
   pixel_sigma_px: 0.3
   residual_sigma_factor: 1.9
   model_sigma_deg: 0.05
+  systematic_noise_fraction: 0.25
   min_inliers: 25
   max_sigma_deg: 1.5
   uncertain_min_inliers: 80
@@ -52,6 +53,7 @@ vision:
   EXPECT_EQ(v.pixel_sigma_px, 0.3);
   EXPECT_EQ(v.residual_sigma_factor, 1.9);
   EXPECT_EQ(v.model_sigma_deg, 0.05);
+  EXPECT_EQ(v.systematic_noise_fraction, 0.25);
   EXPECT_EQ(v.min_inliers, 25);
   EXPECT_EQ(v.max_sigma_deg, 1.5);
   EXPECT_EQ(v.uncertain_min_inliers, 80);
@@ -61,6 +63,7 @@ vision:
   EXPECT_EQ(defaults.pixel_sigma_px, 0.5);
   EXPECT_EQ(defaults.residual_sigma_factor, 1.0);
   EXPECT_EQ(defaults.model_sigma_deg, 0.2);
+  EXPECT_EQ(defaults.systematic_noise_fraction, 1.0);
   EXPECT_FALSE(defaults.min_inliers.has_value());
   EXPECT_FALSE(defaults.max_sigma_deg.has_value());
   EXPECT_FALSE(defaults.uncertain_min_inliers.has_value());

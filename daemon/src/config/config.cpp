@@ -172,7 +172,8 @@ VisionConfig parse_vision(const YamlReader& v) {
   v.expect_map({"enabled", "threads", "cache_images", "queue_capacity", "answer_delay_s",
                 "image_dir", "image_width_px", "image_height_px", "depth_sigma_fraction",
                 "depth_sigma_floor_m", "max_leverage", "pixel_sigma_px", "residual_sigma_factor",
-                "model_sigma_deg", "min_inliers", "max_sigma_deg", "uncertain_min_inliers"});
+                "model_sigma_deg", "systematic_noise_fraction", "min_inliers", "max_sigma_deg",
+                "uncertain_min_inliers"});
   VisionConfig vision;
   if (v.has("enabled")) vision.enabled = v.at("enabled").as_bool();
   v.read("threads", vision.threads, 1, 64);
@@ -187,6 +188,7 @@ VisionConfig parse_vision(const YamlReader& v) {
   v.read("pixel_sigma_px", vision.pixel_sigma_px, 1e-3, 10.0);
   v.read("residual_sigma_factor", vision.residual_sigma_factor, 0.1, 10.0);
   v.read("model_sigma_deg", vision.model_sigma_deg, 0.0, 10.0);
+  v.read("systematic_noise_fraction", vision.systematic_noise_fraction, 0.0, 10.0);
   // Keys whose absence leaves the registration pipeline's default.
   const auto read_optional = [&v]<typename T>(std::string_view key, T lo, T hi) {
     T value = lo;

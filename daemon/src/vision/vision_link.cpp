@@ -94,6 +94,7 @@ VisionLink::VisionLink(const NavdConfig& config, std::string image_dir, Mode mod
   nav::vision::set_pixel_sigma_keeping_parallax_floor(options.refinement, config_.pixel_sigma_px);
   options.refinement.residual_sigma_factor = config_.residual_sigma_factor;
   options.refinement.model_sigma_rad = config_.model_sigma_deg * kRad;
+  options.refinement.systematic_noise_fraction = config_.systematic_noise_fraction;
   if (config_.min_inliers) options.validation.min_inliers = *config_.min_inliers;
   if (config_.max_sigma_deg) options.validation.max_sigma_rad = *config_.max_sigma_deg * kRad;
   if (config_.uncertain_min_inliers)

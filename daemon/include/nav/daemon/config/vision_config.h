@@ -38,6 +38,9 @@ struct VisionConfig {
   double pixel_sigma_px = 0.5;
   double residual_sigma_factor = 1.0;
   double model_sigma_deg = 0.2;
+  /// Systematic feature displacements (a smooth field over each image) as a fraction of the
+  /// noise measured on the pair, [0, 10] (nav/vision/two_view_refinement.h systematic_*).
+  double systematic_noise_fraction = 1.0;
   /// Registrations with fewer inliers are refused, and those with an angle of a larger sigma
   /// (deg) unless they have uncertain_min_inliers; empty: the registration pipeline's defaults.
   std::optional<int> min_inliers;
