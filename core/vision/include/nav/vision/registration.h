@@ -45,8 +45,8 @@ struct RegistrationOptions {
   /// calibrated against rendered truth: pixel sigma 0.3 px, scaled by 1.9 x the fit's own
   /// residual sigma where that is larger, no model error (docs/performance.md "An honest
   /// registration covariance"), plus systematic displacements as large as the measured noise
-  /// (dark, noisy frames of weak texture: docs/performance.md "Real imagery beyond the frames in
-  /// data/images"). navd's closed loop sets its own, more conservative one
+  /// (dark, noisy frames of weak texture: docs/performance.md "Systematic displacements at low
+  /// signal-to-noise"). navd's closed loop sets its own, more conservative one
   /// (nav/daemon/config/vision_config.h).
   TwoViewRefinementOptions refinement = [] {
     TwoViewRefinementOptions o;
