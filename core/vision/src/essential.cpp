@@ -96,6 +96,30 @@ double angle_between(const Candidate& a, const Candidate& b) {
   return Eigen::AngleAxisd(a.R.transpose() * b.R).angle();
 }
 
+/// With a prior (essential.h): among the candidates that put as many points in front as the
+/// best, the one nearest the prior's predicted measurement in Mahalanobis distance. A candidate
+/// whose baseline is along the optical axis has no azimuth: last resort only.
+const Candidate* choose_with_prior(const std::vector<Candidate>& candidates, int best_count,
+                                   const PredictedZ& predicted, double ambiguity_ratio) {
+  const auto S = predicted.covariance.ldlt();
+  const Candidate* chosen = nullptr;
+  double chosen_key = 0.0;
+  for (const Candidate& c : candidates) {
+    if (c.in_front < ambiguity_ratio * best_count) continue;
+    double key = std::numeric_limits<double>::max();
+    try {
+      const Vec5 r = z_minus(z_from_rotation_translation(c.R, c.t), predicted.z);
+      key = r.dot(S.solve(r));
+    } catch (const std::domain_error&) {
+    }
+    if (chosen == nullptr || key < chosen_key) {
+      chosen = &c;
+      chosen_key = key;
+    }
+  }
+  return chosen;
+}
+
 /// Without a prior (essential.h): among the candidates that put as many points in front as the
 /// best and fit the matches as well, the one whose points lie on the least tilted floor; an
 /// error message when another pose fits as well and the floor cannot tell them apart.
@@ -124,16 +148,16 @@ const Candidate* choose_without_prior(const std::vector<Candidate>& candidates, 
     // Seeds of one reconstruction differ by noise (most in the baseline of a short one) and
     // see the same floor; a planar twin turns the camera by about the baseline-to-depth angle
     // and tilts the floor by the baseline's angle to the floor's normal.
+    const double rotation_apart = angle_between(*c, *flattest);
     const double baseline_apart = std::acos(std::clamp(c->t.dot(flattest->t), -1.0, 1.0));
-    const bool twin =
-        (angle_between(*c, *flattest) > kTwinRotationRad || baseline_apart > kTwinBaselineRad) &&
-        c->floor_tilt_rad > flattest->floor_tilt_rad + kSameFloorRad;
+    const bool twin = (rotation_apart > kTwinRotationRad || baseline_apart > kTwinBaselineRad) &&
+                      c->floor_tilt_rad > flattest->floor_tilt_rad + kSameFloorRad;
     if (!twin || (flattest->floor_tilt_rad <= max_tilt &&
                   c->floor_tilt_rad >= flattest->floor_tilt_rad + min_gap)) {
       continue;
     }
     *why = "essential: planar ambiguity without a prior: two poses " +
-           std::to_string(angle_between(*c, *flattest) * 180.0 / M_PI) + " deg (baselines " +
+           std::to_string(rotation_apart * 180.0 / M_PI) + " deg (baselines " +
            std::to_string(baseline_apart * 180.0 / M_PI) +
            " deg) apart fit the matches equally, their floors tilted " +
            std::to_string(flattest->floor_tilt_rad * 180.0 / M_PI) + " and " +
@@ -359,31 +383,10 @@ EssentialEstimate estimate_essential(const ImageFeatures& features_i,
       use_prior = false;
     }
   }
-  const auto S = predicted.covariance.ldlt();
-  auto prior_distance2 = [&](const Candidate& c) {
-    const Vec5 r = z_minus(z_from_rotation_translation(c.R, c.t), predicted.z);
-    return r.dot(S.solve(r));
-  };
-  const Candidate* chosen = nullptr;
-  double chosen_key = 0.0;
-  for (const Candidate& c : candidates) {
-    if (!use_prior || c.in_front < options.ambiguity_ratio * best_count) continue;
-    // With a prior: nearest the prediction. A candidate whose baseline is along the optical
-    // axis has no azimuth: last resort only.
-    double key = std::numeric_limits<double>::max();
-    try {
-      key = prior_distance2(c);
-    } catch (const std::domain_error&) {
-    }
-    if (chosen == nullptr || key < chosen_key) {
-      chosen = &c;
-      chosen_key = key;
-    }
-  }
-  if (!use_prior) {
-    chosen = choose_without_prior(candidates, best_count, focal, options, &out.reason);
-    if (chosen == nullptr) return out;
-  }
+  const Candidate* chosen =
+      use_prior ? choose_with_prior(candidates, best_count, predicted, options.ambiguity_ratio)
+                : choose_without_prior(candidates, best_count, focal, options, &out.reason);
+  if (chosen == nullptr) return out;
   if (chosen->parallax_median_rad * focal < options.min_parallax_px) {
     out.reason = "essential: median parallax " + std::to_string(chosen->parallax_median_rad * focal) +
                  " px below " + std::to_string(options.min_parallax_px) +

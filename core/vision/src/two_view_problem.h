@@ -122,7 +122,7 @@ struct ReliabilityBound {
   std::vector<std::size_t> group;  ///< G, indices into a.
   double max_leverage = 0.0;       ///< max_k a_k^T C a_k.
 };
-ReliabilityBound reliability_bound(const std::vector<PointInformation>& info, const Mat5& C,
+ReliabilityBound reliability_bound(const std::vector<PointInformation>& a, const Mat5& C,
                                    double delta0, int max_group);
 
 /// Result of one Levenberg-Marquardt run.

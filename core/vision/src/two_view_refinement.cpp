@@ -304,8 +304,6 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
   const std::vector<PointInformation> info = point_information(x, X, ui, uj, cam, inv_sigma);
   const ReliabilityBound reliability =
       reliability_bound(info, covariance_delta, opt.reliability_delta0, opt.reliability_group);
-  const double systematic_px =
-      opt.systematic_sigma_px + opt.systematic_noise_fraction * out.robust_sigma_px;
   out.max_leverage = reliability.max_leverage;
   for (const std::size_t k : reliability.group)
     out.reliability_matches.push_back(out.used_matches[k]);
@@ -318,6 +316,8 @@ TwoViewRefinement refine_two_view(const std::vector<Eigen::Vector2d>& u_i_px,
   }
   out.information_covariance = out.covariance_scale * J * covariance_delta * J.transpose();
   out.reliability_covariance = out.covariance_scale * J * reliability.covariance * J.transpose();
+  const double systematic_px =
+      opt.systematic_sigma_px + opt.systematic_noise_fraction * out.robust_sigma_px;
   const Mat5 systematic_delta =
       systematic_field_covariance(info, ui, uj, cam, inv_sigma, covariance_delta, systematic_px);
   out.systematic_covariance = J * systematic_delta * J.transpose();
