@@ -85,7 +85,7 @@ class CovarianceBounds {
 
   /// The filter predicted x_{t+1} = f(x_t) + w with Jacobian F and noise Q. When keep_current,
   /// the old robot became delayed state `kept_state` and gets the robot's bound (Algorithm 1:
-  /// Σ~_ii = Σ_rr). Then B_rr <- F B_rr Fᵀ + Q.
+  /// Σ~_ii = Σ_rr). Then B_rr <- F B_rr Fᵀ + Q; both scaled by 1 + the rounding of Λ's update.
   Status predict_robot(const Eigen::MatrixXd& F, const Eigen::MatrixXd& Q, bool keep_current,
                        int kept_state);
 
