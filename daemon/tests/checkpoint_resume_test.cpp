@@ -25,16 +25,17 @@
 #include <thread>
 #include <vector>
 
+#include "nav/core/navigation/nav_filter.h"
 #include "nav/core/serialization/byte_io.h"
 #include "nav/core/serialization/map_codec.h"
 #include "nav/core/sim/survey.h"
 #include "nav/daemon/checkpoint/checkpoint.h"
 #include "nav/daemon/checkpoint/checkpoint_worker.h"
-#include "nav/daemon/config/config.h"
-#include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/checkpoint/nav_filter_checkpoint.h"
 #include "nav/daemon/checkpoint/resume_point.h"
-#include "nav/core/navigation/nav_filter.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/filter/filter_options.h"
+#include "support/nav_filter_fixture.h"
 #include "support/synthetic_dive.h"
 
 namespace nav::daemon {
@@ -341,6 +342,7 @@ TEST_F(CheckpointResume, PayloadThatDoesNotDecodeIsSkippedWithItsReason) {
 struct FilterDive {
   FilterDive() {
     config = nav::testing::synthetic_dive_config();  // ctest runs in the source directory
+    nav::testing::use_block_jacobi(config);          // bit-identical, and fork() below
     nav::testing::SyntheticDiveOptions o;
     o.duration_s = 120.0;
     dive = nav::testing::make_synthetic_dive(config, o);

@@ -9,16 +9,18 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <vector>
 
+#include "nav/core/navigation/nav_filter.h"
 #include "nav/core/serialization/sections.h"
-#include "nav/daemon/config/config.h"
-#include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/checkpoint/nav_filter_checkpointer.h"
 #include "nav/daemon/checkpoint/resume_point.h"
-#include "nav/core/navigation/nav_filter.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/filter/filter_options.h"
 #include "support/nav_filter_fixture.h"
 
 namespace nav::daemon {
@@ -66,6 +68,44 @@ TEST(NavFilterCheckpoint, ResumedFilterEndsBitIdentical) {
     EXPECT_EQ(encode(*resumed), expected) << "cut " << cut;
     EXPECT_EQ(resumed->links().size(), reference->links().size());
     EXPECT_EQ(resumed->esdf().num_blocks(), reference->esdf().num_blocks());  // no state lost
+  }
+}
+
+// config/sim.yaml's kept factor is not checkpointed: the restored filter factors its Λ afresh
+// at the next image (docs/formats.md "Checkpoints"). The run then equals the uninterrupted one
+// up to rounding: the same states and links, means and bounds within 1e-9 of their scale.
+TEST(NavFilterCheckpoint, ResumedWithTheKeptFactorEqualsTheRunUpToRounding) {
+  const Fixture fx(120.0);
+  NavdConfig config = fx.config;
+  config.filter.recovery_preconditioner = core::RecoveryPreconditioner::kFactor;
+  config.filter.recovery_keep_factor_equal = true;
+  config.filter.recovery_refresh_interval = 10;
+  const NavFilterOptions options = filter_options_from_config(config);
+  const auto& ms = fx.dive.measurements;
+  auto reference = fx.make(options);
+  for (const Measurement& m : ms) ASSERT_TRUE(reference->process(m).ok());
+  ASSERT_TRUE(reference->finish().ok());
+  ASSERT_GT(reference->counters().links_accepted, 20u);
+  for (const std::size_t cut : {ms.size() / 3, 2 * ms.size() / 3}) {
+    auto original = fx.make(options);
+    for (std::size_t i = 0; i < cut; ++i) ASSERT_TRUE(original->process(ms[i]).ok());
+    auto resumed = fx.make(options);
+    ASSERT_TRUE(restore(encode(*original), resumed.get()).ok()) << "cut " << cut;
+    for (std::size_t i = cut; i < ms.size(); ++i) ASSERT_TRUE(resumed->process(ms[i]).ok());
+    ASSERT_TRUE(resumed->finish().ok());
+    ASSERT_EQ(resumed->esdf().num_blocks(), reference->esdf().num_blocks());
+    EXPECT_EQ(resumed->links().size(), reference->links().size());
+    const Eigen::VectorXd& mean = reference->esdf().mean();
+    const double mean_diff = (resumed->esdf().mean() - mean).lpNorm<Eigen::Infinity>();
+    double bound_diff = 0.0;  // relative to the bound's own size
+    for (int i = 1; i < reference->esdf().num_blocks(); ++i) {
+      const Eigen::MatrixXd& b = reference->bounds().bound(i);
+      bound_diff = std::max(bound_diff, (resumed->bounds().bound(i) - b).norm() / b.norm());
+    }
+    std::printf("cut %zu: max mean difference %.3g (mean scale %.3g), max bound difference %.3g\n",
+                cut, mean_diff, mean.lpNorm<Eigen::Infinity>(), bound_diff);
+    EXPECT_LT(mean_diff, 1e-9 * mean.lpNorm<Eigen::Infinity>()) << "cut " << cut;
+    EXPECT_LT(bound_diff, 1e-9) << "cut " << cut;
   }
 }
 
