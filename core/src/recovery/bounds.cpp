@@ -38,18 +38,16 @@ Eigen::MatrixXd padded(const Eigen::MatrixXd& sigma, double tau) {
 /// marginalising x_t cancels most of it again, so those blocks carry an absolute rounding of
 /// order ε‖FᵀQ⁻¹F‖ beside an information of order B⁻¹. The marginals of the stored Λ then
 /// differ from the recursion F B Fᵀ + Q by a relative ρ ≈ ε λmax(B^½ FᵀQ⁻¹F B^½) <=
-/// ε tr(FᵀQ⁻¹F B): 1e-7 to 1e-6 after the 5 ms steps that follow images on the default dive
-/// (Q ∝ dt³ in position), where the exact marginals fell below the recursion by 1.0 ρ
-/// (docs/consistency.md "Rounding of short predictions"). Returned: 8 ε tr(FᵀQ⁻¹F B), 0 if Q is
-/// not positive definite (the filter refuses such a prediction).
-double prediction_rounding(const Eigen::MatrixXd& F, const Eigen::MatrixXd& Q,
-                           const Eigen::MatrixXd& B) {
+/// ε tr(FᵀQ⁻¹F B) = ε tr(Q⁻¹ F B Fᵀ): 1e-7 to 1e-6 after the 5 ms steps that follow images on
+/// the default dive (Q ∝ dt³ in position), where the exact marginals fell below the recursion by
+/// 1.0 ρ (docs/consistency.md "Rounding of short predictions"). Takes FBF = F B Fᵀ; returns
+/// 8 ε tr(Q⁻¹ FBF), 0 if Q is not positive definite (the filter refuses such a prediction).
+double prediction_rounding(const Eigen::MatrixXd& Q, const Eigen::MatrixXd& FBF) {
   constexpr double kSafety = 8.0;
   const Eigen::LLT<Eigen::MatrixXd> llt(symmetric(Q));
   if (llt.info() != Eigen::Success) return 0.0;
-  const Eigen::MatrixXd G = F.transpose() * llt.solve(F);
-  const double trace_GB = G.cwiseProduct(symmetric(B)).sum();  // tr(G B), B symmetric
-  return kSafety * std::numeric_limits<double>::epsilon() * std::max(0.0, trace_GB);
+  const double trace = llt.solve(FBF).trace();
+  return kSafety * std::numeric_limits<double>::epsilon() * std::max(0.0, trace);
 }
 
 }  // namespace
@@ -125,12 +123,13 @@ Status CovarianceBounds::predict_robot(const Eigen::MatrixXd& F, const Eigen::Ma
     return Status::Error(StatusCode::kInvalidArgument,
                          "CovarianceBounds::predict_robot: initialize_robot() first");
   }
-  const double grow = 1.0 + prediction_rounding(F, Q, robot_bound_);
+  const Eigen::MatrixXd FBF = F * robot_bound_ * F.transpose();
+  const double grow = 1.0 + prediction_rounding(Q, FBF);
   if (keep_current) {
     if (kept_state < 1) return insert(kept_state);  // its error names the bad index
     store(kept_state, grow * robot_bound_);
   }
-  set_robot_bound(grow * (F * robot_bound_ * F.transpose() + Q));
+  set_robot_bound(grow * (FBF + Q));
   return Status::Ok();
 }
 

@@ -1,8 +1,6 @@
 // Consider covariance of the two-view pose for smooth systematic feature displacements
 // (two_view_problem.h, systematic_field_covariance).
 #include <Eigen/Core>
-#include <algorithm>
-#include <cmath>
 #include <vector>
 
 #include "two_view_problem.h"
