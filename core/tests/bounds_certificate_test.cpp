@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
-
+#include <limits>
 #include <random>
 
 #include "nav/core/recovery/bounds.h"
@@ -148,6 +148,69 @@ TEST(BoundsCertificate, ExactRefreshIsTheMarginalPlusTheMargin) {
   const Eigen::SparseMatrix<double> sparse = p.lambda.sparseView();
   EXPECT_EQ(bounds.refresh_exact(ExactMarginals::compute(sparse, p.d), p.blocks + 1).code(),
             StatusCode::kInvalidArgument);
+}
+
+// A recovery job's exact marginals come from an earlier Λ with fewer states (its snapshot):
+// they reset those states' bounds only; the robot and the states kept since keep theirs.
+TEST(BoundsCertificate, RefreshFromAnEarlierSnapshotResetsItsStatesOnly) {
+  const Problem p = make_problem(6);
+  const int d = p.d, m = 4;  // the snapshot had blocks 0..3
+  CovarianceBounds bounds(d);
+  const Eigen::MatrixXd loose = 10.0 * p.sigma.topLeftCorner(d, d);
+  ASSERT_TRUE(bounds.initialize_robot(loose).ok());
+  for (int i = 1; i < p.blocks; ++i) ASSERT_TRUE(bounds.insert(i).ok());
+  Eigen::MatrixXd stacked(m * d, d);
+  for (int j = 0; j < m; ++j) stacked.middleRows(j * d, d) = p.sigma.block(j * d, j * d, d, d);
+  ASSERT_TRUE(bounds.refresh_exact(stacked, p.blocks).ok());
+  const double tau = bounds.options().rounding_margin;
+  for (int i = 1; i < m; ++i) {
+    Eigen::MatrixXd padded = (1.0 + tau) * stacked.middleRows(i * d, d);
+    padded.diagonal() += tau * stacked.middleRows(i * d, d).diagonal();
+    EXPECT_LT((bounds.bound(i) - padded).norm(), 1e-15 * padded.norm()) << "state " << i;
+  }
+  for (int i = m; i < p.blocks; ++i) {
+    EXPECT_LT((bounds.bound(i) - loose).norm(), 1e-15 * loose.norm()) << "state " << i;
+  }
+  EXPECT_LT((bounds.robot_bound() - loose).norm(), 1e-15 * loose.norm());
+  // Refused: more blocks than the filter has, a ragged or non-finite matrix, a missing state.
+  EXPECT_EQ(bounds.refresh_exact(stacked, m - 1).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(bounds.refresh_exact(stacked.topRows(m * d - 1), p.blocks).code(),
+            StatusCode::kInvalidArgument);
+  Eigen::MatrixXd bad = stacked;
+  bad(d, 0) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(bounds.refresh_exact(bad, p.blocks).code(), StatusCode::kInvalidArgument);
+  CovarianceBounds partial(d);
+  ASSERT_TRUE(partial.initialize_robot(loose).ok());
+  ASSERT_TRUE(partial.insert(1).ok());
+  EXPECT_EQ(partial.refresh_exact(stacked, p.blocks).code(), StatusCode::kInvalidArgument);
+}
+
+// A prediction's rounding in Λ may raise EVERY marginal by 1 + ρ, ρ = 8 ε tr(Q⁻¹ F B Fᵀ)
+// (bounds.cpp prediction_rounding): the stored bounds grow by the product at the next
+// set_recovery, and an exact refresh of the current Λ starts them afresh.
+TEST(BoundsCertificate, StoredBoundsGrowByThePredictionsRoundingAtTheNextRecovery) {
+  const Problem p = make_problem(7);
+  const int d = p.d, n = d * p.blocks;
+  CovarianceBounds bounds = exact_bounds(p);
+  const Eigen::MatrixXd before = bounds.bound(2);
+  const Eigen::MatrixXd F = Eigen::MatrixXd::Identity(d, d);
+  const Eigen::MatrixXd Q = 1e-9 * Eigen::MatrixXd::Identity(d, d);
+  double growth = 1.0;
+  for (int k = 0; k < 3; ++k) {
+    growth *=
+        1.0 + 8.0 * std::numeric_limits<double>::epsilon() * bounds.robot_bound().trace() / 1e-9;
+    ASSERT_TRUE(bounds.predict_robot(F, Q, false, -1).ok());
+  }
+  ASSERT_GT(growth - 1.0, 1e-4);
+  EXPECT_EQ(bounds.bound(2), before);  // until the next set_recovery
+  const Eigen::MatrixXd sigma_rr = p.sigma.topLeftCorner(d, d);
+  ASSERT_TRUE(bounds.set_recovery(sigma_rr, Eigen::MatrixXd::Zero(n, d), p.blocks).ok());
+  EXPECT_LT((bounds.bound(2) - growth * before).norm(), 1e-12 * before.norm());
+  ASSERT_TRUE(bounds.predict_robot(F, Q, false, -1).ok());
+  const Eigen::SparseMatrix<double> sparse = p.lambda.sparseView();
+  ASSERT_TRUE(bounds.refresh_exact(ExactMarginals::compute(sparse, d), p.blocks).ok());
+  ASSERT_TRUE(bounds.set_recovery(sigma_rr, Eigen::MatrixXd::Zero(n, d), p.blocks).ok());
+  EXPECT_LT((bounds.bound(2) - before).norm(), 1e-9 * before.norm());
 }
 
 }  // namespace

@@ -40,7 +40,9 @@ Eigen::MatrixXd padded(const Eigen::MatrixXd& sigma, double tau) {
 /// differ from the recursion F B Fᵀ + Q by a relative ρ ≈ ε λmax(B^½ FᵀQ⁻¹F B^½) <=
 /// ε tr(FᵀQ⁻¹F B) = ε tr(Q⁻¹ F B Fᵀ): 1e-7 to 1e-6 after the 5 ms steps that follow images on
 /// the default dive (Q ∝ dt³ in position), where the exact marginals fell below the recursion by
-/// 1.0 ρ (docs/consistency.md "Rounding of short predictions"). Takes FBF = F B Fᵀ; returns
+/// 1.0 ρ (docs/consistency.md "Rounding of short predictions"). The perturbation δ of Λ has
+/// λmax(Σ^½ δ Σ^½) <= ρ, so EVERY marginal, not only the robot's, may grow by a factor 1 + ρ:
+/// stored bounds are grown by the product at the next set_recovery. Takes FBF = F B Fᵀ; returns
 /// 8 ε tr(Q⁻¹ FBF), 0 if Q is not positive definite (the filter refuses such a prediction).
 double prediction_rounding(const Eigen::MatrixXd& Q, const Eigen::MatrixXd& FBF) {
   constexpr double kSafety = 8.0;
@@ -124,13 +126,27 @@ Status CovarianceBounds::predict_robot(const Eigen::MatrixXd& F, const Eigen::Ma
                          "CovarianceBounds::predict_robot: initialize_robot() first");
   }
   const Eigen::MatrixXd FBF = F * robot_bound_ * F.transpose();
-  const double grow = 1.0 + prediction_rounding(Q, FBF);
+  const double rounding = prediction_rounding(Q, FBF);
   if (keep_current) {
     if (kept_state < 1) return insert(kept_state);  // its error names the bad index
-    store(kept_state, grow * robot_bound_);
+    store(kept_state, robot_bound_);  // grown with the others at the next set_recovery
   }
-  set_robot_bound(grow * (FBF + Q));
+  set_robot_bound((1.0 + rounding) * (FBF + Q));
+  pending_growth_ += std::log1p(rounding);
   return Status::Ok();
+}
+
+void CovarianceBounds::apply_pending_growth() {
+  if (pending_growth_ == 0.0) return;
+  const double grow = std::exp(pending_growth_);
+  pending_growth_ = 0.0;
+  lambda_sum_ = 0.0;
+  for (Entry& e : entries_) {
+    if (!e.present) continue;
+    e.bound *= grow;
+    e.lambda_max *= grow;
+    lambda_sum_ += e.lambda_max;
+  }
 }
 
 Status CovarianceBounds::insert(int state) {
@@ -231,6 +247,7 @@ Status CovarianceBounds::set_recovery_with(
                              " have bounds; the certificate needs every state (insert on every "
                              "augmentation)");
   }
+  apply_pending_growth();
   sigma_rr_hat_ = symmetric(sigma_rr);
   residual_frobenius_ = residual_frobenius;
   ++epoch_;  // bounds stored from now on are tightened within this snapshot
@@ -260,19 +277,39 @@ Status CovarianceBounds::refresh_exact(const ExactMarginals& exact, int num_stat
                              std::to_string(block_dim_) + " with " + std::to_string(num_bounds_) +
                              " bounds");
   }
-  const double tau = options_.rounding_margin;
-  set_robot_bound(padded(exact.marginal(0), tau));
-  for (int j = 1; j < num_states; ++j) {
-    Entry& e = entries_[static_cast<size_t>(j)];
-    lambda_sum_ -= e.lambda_max;
-    e.bound = padded(exact.marginal(j), tau);
-    e.lambda_max = std::max(0.0, lambda_max_symmetric(e.bound));
-    lambda_sum_ += e.lambda_max;
-    e.snapshot_bound.resize(0, 0);
-    e.snapshot_lambda_max = 0.0;
-    e.snapshot_epoch = -1;
-  }
+  set_robot_bound(padded(exact.marginal(0), options_.rounding_margin));
+  for (int j = 1; j < num_states; ++j) reset_to_exact(j, exact.marginal(j));
+  pending_growth_ = 0.0;  // every bound is of the current Λ now
   return Status::Ok();
+}
+
+Status CovarianceBounds::refresh_exact(const Eigen::Ref<const Eigen::MatrixXd>& marginals,
+                                       int num_states) {
+  const int d = block_dim_;
+  const auto blocks = static_cast<int>(marginals.rows() / d);
+  bool ok = marginals.cols() == d && marginals.rows() % d == 0 && blocks >= 1 &&
+            blocks <= num_states && marginals.allFinite();
+  for (int j = 1; ok && j < blocks; ++j) ok = contains(j);
+  if (!ok) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "CovarianceBounds::refresh_exact: earlier marginals of shape " +
+                             shape(marginals) + " (finite, a multiple of " + std::to_string(d) +
+                             " rows by " + std::to_string(d) + ", every state with a bound) " +
+                             "for a filter of " + std::to_string(num_states) + " blocks");
+  }
+  for (int j = 1; j < blocks; ++j) reset_to_exact(j, marginals.middleRows(j * d, d));
+  return Status::Ok();
+}
+
+void CovarianceBounds::reset_to_exact(int state, const Eigen::MatrixXd& exact_marginal) {
+  Entry& e = entries_[static_cast<size_t>(state)];
+  lambda_sum_ -= e.lambda_max;
+  e.bound = padded(exact_marginal, options_.rounding_margin);
+  e.lambda_max = std::max(0.0, lambda_max_symmetric(e.bound));
+  lambda_sum_ += e.lambda_max;
+  e.snapshot_bound.resize(0, 0);
+  e.snapshot_lambda_max = 0.0;
+  e.snapshot_epoch = -1;
 }
 
 Status CovarianceBounds::propose(int state, const Eigen::MatrixXd& sigma_ir,

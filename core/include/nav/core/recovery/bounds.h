@@ -19,8 +19,7 @@
 // E = Σ_{*r} - X = Σ R; with W = B_rr >= Σ_rr and B_ii >= Σ_ii, for the rows E_i of block i
 //   ‖B_ii^-½ E_i W^-½‖₂ <= ‖Σ^½ R W^-½‖₂ =: κ̄,   κ̄² = λmax(W^-½ Rᵀ Σ R W^-½),
 // bounded without Λ⁻¹ by K1, K2 or K3 (certificate.h); κ = the square root of the smallest: a
-// factor on the blocks themselves, no m² added to rad². The
-// certified joint of a proposal r <-> i is
+// factor on the blocks themselves, no m² added to rad². The certified joint of r <-> i is
 //   J~ = [sym(X_rr) + 2κ W,  X_irᵀ ;  X_ir,  (1 + κ) Σ~_ii]  >=  J  (PSD difference),
 // whatever the residual (derivation: docs/consistency.md "The certificate"); the robot bound
 // becomes sym(X_rr) + κ W when that has smaller trace. κ, W, L and the B_jj are frozen at
@@ -29,7 +28,8 @@
 // smaller-trace result. B_rr follows predictions (F B Fᵀ + Q).
 // Exact refresh (refresh_exact): the ESDF's Λ only gains PSD terms (augmentation keeps every
 // delayed state's marginal, updates add Hᵀ R⁻¹ H), so an exact marginal Σ_ii(t) (selected
-// inversion) plus a rounding margin bounds Σ_ii for all later t; Algorithm 1 tightens from it.
+// inversion) plus a rounding margin bounds Σ_ii for all later t, up to the rounding that later
+// predictions store in Λ (predict_robot); Algorithm 1 tightens from it.
 // Correlation-free fallback: for PSD [A B; Bᵀ C] and ω in (0, 1), [A B; Bᵀ C] <=
 // blkdiag(A/ω, C/(1-ω)) (covariance intersection); update() also updates blkdiag(B_rr/ω,
 // Σ~_ii/(1-ω)) for a few ω and keeps the smallest-trace posterior (all are certified).
@@ -37,10 +37,8 @@
 // the robot's prior bound is >= its covariance and the residual handed to set_recovery is the
 // true one (or ρ >= its spectral norm), every Σ~_ii - Σ_ii is PSD up to rounding, whatever the
 // CG budget. Without it: the paper's Algorithm 1 (κ = 0), conservative for exact recovery only.
-//
-// Costs: O(block_dim³) per call, independent of the map size, except set_recovery with the
-// residual matrix (K2: O(n block_dim³)) and refresh_exact (O(n block_dim³)), once per image.
-// Not thread-safe (recovery thread).
+// Costs: O(d³) per call, independent of the map size, except set_recovery with the residual
+// matrix (K2) and refresh_exact: O(n d³), once per image. Not thread-safe.
 
 #include <Eigen/Core>
 #include <functional>
@@ -79,27 +77,22 @@ class CovarianceBounds {
 
   int block_dim() const { return block_dim_; }
   const BoundsOptions& options() const { return options_; }
-
   /// The robot's prior covariance P0 (an upper bound of Σ_rr by definition).
   Status initialize_robot(const Eigen::MatrixXd& P0);
-
   /// The filter predicted x_{t+1} = f(x_t) + w with Jacobian F and noise Q. When keep_current,
   /// the old robot became delayed state `kept_state` and gets the robot's bound (Algorithm 1:
-  /// Σ~_ii = Σ_rr). Then B_rr <- F B_rr Fᵀ + Q; both scaled by 1 + the rounding of Λ's update.
+  /// Σ~_ii = Σ_rr). Then B_rr <- (1 + ρ)(F B_rr Fᵀ + Q), ρ the rounding of Λ's update, which
+  /// every stored bound gets too at the next set_recovery (refresh_exact of Λ clears it).
   Status predict_robot(const Eigen::MatrixXd& F, const Eigen::MatrixXd& Q, bool keep_current,
                        int kept_state);
-
   /// A measurement of the robot alone, z = h(x_r) + v, v ~ N(0, R), linearised with H (m x d):
   /// Joseph-form Kalman update of the robot bound. The filter's robot marginal after a unary
-  /// update is exactly the Kalman update of its prior marginal, and the update is monotone in the
-  /// prior, so B_rr >= Σ_rr still holds afterwards. Keeps B_rr (and with it every new state's
-  /// bound and L) from growing like an unaided prediction between recoveries. O(d³).
+  /// update is exactly the Kalman update of its prior marginal, monotone in the prior, so B_rr
+  /// >= Σ_rr still holds: B_rr (and every new state's bound) does not grow unaided. O(d³).
   /// kNotPositiveDefinite (bound unchanged) if H B Hᵀ + R is not SPD.
   Status update_robot(const Eigen::MatrixXd& H, const Eigen::MatrixXd& R);
-
   /// Inserts delayed state i with the robot's current bound (an augmentation without prediction).
   Status insert(int state);
-
   /// Hands in the recovery of this snapshot: sym(Σ^_rr) and an upper bound ρ of the true
   /// residual's spectral norm ‖E_r - ΛX‖₂ of the covariance columns (column_residual_spectral;
   /// the Frobenius norm is valid too, looser): κ by (K1) with RᵀR <= ρ² I.
@@ -121,11 +114,15 @@ class CovarianceBounds {
   /// rounding margin (file comment). Call before set_recovery of the same Λ. kInvalidArgument
   /// if the marginals' blocks do not match the filter's `num_states` or a state has no bound.
   Status refresh_exact(const ExactMarginals& exact, int num_states);
+  /// The same from the exact Σ_jj of an EARLIER Λ of this filter with m <= num_states blocks
+  /// (a recovery job's snapshot; block j in rows [j d, (j+1) d) of `marginals`, m d x d): resets
+  /// states 1..m-1 only; later states and the robot keep their bounds. Valid as Λ only gained
+  /// PSD terms since (file comment). kInvalidArgument for a bad shape or a state without bound.
+  Status refresh_exact(const Eigen::Ref<const Eigen::MatrixXd>& marginals, int num_states);
 
   /// The joint for a proposal between the robot and state i, from the recovered cross
   /// covariance Σ^_ir (rows of block i of the robot column). kUnknownState if i has no bound.
   Status propose(int state, const Eigen::MatrixXd& sigma_ir, LinkProposal* proposal) const;
-
   /// Covariance of the offset of the first two elements, x_i[0:2] − x_r[0:2], under the joint
   /// propose() would build from a Σ^_ir whose top-left 2x2 is `sigma_ir_top_left` (rr + ii − ir
   /// − irᵀ, same inflations, same floating-point operations: equal to computing it from
@@ -170,6 +167,8 @@ class CovarianceBounds {
     long snapshot_epoch = -1;
   };
   void store(int state, const Eigen::MatrixXd& bound);
+  void reset_to_exact(int state, const Eigen::MatrixXd& exact_marginal);  ///< + rounding margin
+  void apply_pending_growth();  ///< every stored bound *= exp(pending_growth_)
   /// Joseph-form posterior of `joint` (2d x 2d); false if S is not SPD or the result not finite.
   static bool joseph(const Eigen::MatrixXd& joint, const Eigen::MatrixXd& H,
                      const Eigen::MatrixXd& R, Eigen::MatrixXd* posterior);
@@ -195,6 +194,7 @@ class CovarianceBounds {
   Eigen::MatrixXd certificate_robot_bound_;  // W: the robot bound frozen at set_recovery
   double certificate_lambda_ = 0.0;  // L frozen at set_recovery
   long epoch_ = 0;                   // incremented by set_recovery
+  double pending_growth_ = 0.0;      // Σ log(1 + ρ) of the predictions since set_recovery
 };
 
 }  // namespace nav::core

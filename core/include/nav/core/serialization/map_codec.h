@@ -9,10 +9,11 @@
 //   u32 d, u32 n, u64 blocks-written counter,
 //   n x { d*d diagonal block, u32 k, k x { u32 column, d*d block } }   (both halves stored)
 //   n*d η, n*d μ
-// Section "BNDS", version 2 (v1 had the isotropic ε_r instead of κ and W):
+// Section "BNDS", version 3 (v2 had no growth; v1 had the isotropic ε_r instead of κ and W):
 //   u32 d, u8 certify_truncation, matrix robot bound (d x d or 0 x 0 before initialize_robot),
 //   f64 λmax(robot bound), matrix Σ^_rr (d x d or 0 x 0), f64 residual ‖R‖_F, f64 κ,
-//   matrix W (certificate robot bound, d x d or 0 x 0), f64 certificate L, f64 running Σ λmax, i64 epoch, u32 m,
+//   matrix W (certificate robot bound, d x d or 0 x 0), f64 certificate L, f64 running Σ λmax,
+//   i64 epoch, f64 rounding growth since set_recovery (log), u32 m,
 //   m x { u32 state, matrix bound (d x d), f64 λmax, matrix snapshot bound (d x d, or 0 x 0 when
 //         never snapshotted), f64 snapshot λmax, i64 snapshot epoch }   (states ascending)
 // Section "RCVY", version 1: the state recovery's warm start [μ | Σ_{*r}] (the only state a
@@ -44,7 +45,7 @@ namespace nav::core {
 inline constexpr std::uint32_t kEsdfSectionTag = section_tag("ESDF");
 inline constexpr std::uint32_t kEsdfSectionVersion = 1;
 inline constexpr std::uint32_t kBoundsSectionTag = section_tag("BNDS");
-inline constexpr std::uint32_t kBoundsSectionVersion = 2;
+inline constexpr std::uint32_t kBoundsSectionVersion = 3;
 inline constexpr std::uint32_t kRecoverySectionTag = section_tag("RCVY");
 inline constexpr std::uint32_t kRecoverySectionVersion = 1;
 

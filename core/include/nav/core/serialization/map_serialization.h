@@ -141,6 +141,8 @@ void CovarianceBounds::serialize(Archive& ar, int num_filter_blocks) {
   ar(lambda_sum_, "Σ λmax");
   ar(epoch_, "epoch");
   ar.check(epoch_ >= 0, "negative epoch " + std::to_string(epoch_));
+  ar(pending_growth_, "rounding growth since set_recovery");
+  ar.check(pending_growth_ >= 0, "negative rounding growth");
   auto m = static_cast<std::uint32_t>(num_bounds_);
   ar(m, "bound count");
   // state, bound (shape + d*d), λmax, snapshot bound (at least its 0x0 shape), λmax, epoch
