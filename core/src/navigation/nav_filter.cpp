@@ -114,6 +114,7 @@ NavFilter::NavFilter(NavFilterOptions options, const RegistrationTable* registra
       pending_(options_.registration_wait_s, options_.max_pending_registrations),
       altitude_m_(options_.default_altitude_m) {
   image_of_block_.push_back(-1);
+  warm_.record_steps = jobs_.enabled();
 }
 
 void NavFilter::restore_map(Esdf filter, CovarianceBounds bounds, StateRecovery recovery) {

@@ -1,7 +1,6 @@
 // NavFilter state recovery at images: the warm-start extension, the certificate handed to the
 // bounds, and the recovery executor's jobs (navigation/nav_filter.h "Image", "Recovery
 // executor"; the schedule: recovery_executor.h).
-#include <Eigen/Cholesky>
 #include <string>
 
 #include "nav/core/navigation/nav_filter.h"
@@ -106,17 +105,19 @@ void NavFilter::take_recovery_result() {
     return;
   }
   // The job refined the snapshot's warm start; what the filter did since (predictions, robot
-  // updates, a kept state) is still in A, P and the kept block and extends the new iterate at
-  // the next image. P follows the new Σ_tt to first order: P += A (Σ'_tt − Σ_tt) Aᵀ.
+  // updates, a kept state) extends the new iterate at the next image: A and P are recomputed
+  // from the job's Σ_tt by the recorded steps (warm_start_tracker.h).
   const int d = 12;
   Mat12 sigma_new = out.solution.block(0, 1, d, d);
-  sigma_new = 0.5 * (sigma_new + sigma_new.transpose()).eval();
-  const Mat12 P_new = warm_.P + warm_.A * (sigma_new - warm_.sigma_tt) * warm_.A.transpose();
-  // If P_new is not positive definite, keep the tracked P: the extension then uses
-  // Q = P − A Σ'_tt Aᵀ (a warm start only).
-  if (Eigen::LLT<Mat12>(P_new).info() == Eigen::Success) warm_.P = P_new;
-  warm_.sigma_tt = sigma_new;
+  warm_.replay_from(0.5 * (sigma_new + sigma_new.transpose()));
   (void)recovery_.set_solution(out.solution);
+  // The job refactored its snapshot's Λ: its exact marginals bound the same states now.
+  if (out.marginals.size() > 0) {
+    if (Status s = bounds_.refresh_exact(out.marginals, filter_.num_blocks()); !s.ok()) {
+      warn("NavFilter: exact refresh of the bounds from the recovery job at t = " +
+           std::to_string(time_us_) + " us skipped: " + s.to_string());
+    }
+  }
   const Eigen::Index blocks = out.solution.rows() / d;
   for (Eigen::Index b = 1; b < blocks; ++b) {
     (void)filter_.set_mean_block(static_cast<int>(b), out.solution.col(0).segment(b * d, d));

@@ -4,17 +4,28 @@
 #include <cmath>
 #include <utility>
 
+#include "nav/core/recovery/exact_marginals.h"
+
 namespace nav::core {
 
 void run_recovery_job(StateRecovery& recovery, const InformationMatrix& lambda,
                       const Eigen::VectorXd& eta, RecoveryOutput& output) {
   output.result = RecoveryResult{};
+  output.marginals.resize(0, 0);
   if (Status s = recovery.set_solution(output.solution); !s.ok()) {
     output.result.status = s;
     return;
   }
   output.result = recovery.solve(lambda, eta);
   output.solution = recovery.solution();
+  output.marginals.resize(0, 0);
+  const ExactMarginals* exact = recovery.refreshed_marginals();
+  if (!output.result.status.ok() || !output.result.refreshed || exact == nullptr) return;
+  const int d = exact->block_dim();
+  output.marginals.resize(Eigen::Index{exact->num_blocks()} * d, d);
+  for (int j = 0; j < exact->num_blocks(); ++j) {
+    output.marginals.middleRows(Eigen::Index{j} * d, d) = exact->marginal(j);
+  }
 }
 
 InlineRecoveryExecutor::InlineRecoveryExecutor(int block_dim, const StateRecoveryOptions& options)

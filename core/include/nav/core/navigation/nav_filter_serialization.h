@@ -84,12 +84,21 @@ void serialize(Archive& ar, NavFilterCounters& c) {
 }
 
 template <class Archive>
+void serialize(Archive& ar, RobotStep& s) {
+  ar(s.a, "robot step F or H");
+  ar(s.b, "robot step Q or R");
+  ar(s.meas_dim, "robot step measurement dimension");
+  ar.check(s.meas_dim >= 0 && s.meas_dim <= kMaxMeasDim, "robot step measurement dimension");
+}
+
+template <class Archive>
 void serialize(Archive& ar, WarmStartTracker& w) {
   ar(w.A, "A since recovery");
   ar(w.P, "P robot");
   ar(w.sigma_tt, "Σ_tt");
   ar(w.predicted, "predicted since recovery");
   ar(w.kept, "kept since recovery");
+  ar(w.steps, "robot steps since recovery");
 }
 
 /// A recovery job's result without its solution matrix (its shape depends on the filter).
@@ -154,6 +163,8 @@ void NavFilter::serialize(Archive& ar) {
   if (!ok) out.solution.resize(0, 0);
   ar.matrix(out.solution, ok ? recovery_.solution().rows() : 0, ok ? 13 : 0, !ok,
             "recovery job solution");
+  if (!ok) out.marginals.resize(0, 0);
+  ar.matrix(out.marginals, out.solution.rows(), 12, true, "recovery job exact marginals");
   if constexpr (Archive::kReading) {
     if (ar.ok() && jobs_.enabled()) jobs_.restore(out, handoff_us);
   }

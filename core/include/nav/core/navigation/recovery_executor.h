@@ -27,6 +27,10 @@ namespace nav::core {
 struct RecoveryOutput {
   RecoveryResult result;
   Eigen::MatrixXd solution;  ///< [μ | Σ_{*r}] of the snapshot (valid when result.status is ok)
+  /// When the job refactored (result.refreshed): the exact Σ_jj of the snapshot's Λ, block j in
+  /// rows [j d, (j+1) d), for the bounds' refresh at the hand-off (bounds.h refresh_exact);
+  /// empty otherwise.
+  Eigen::MatrixXd marginals;
 };
 
 /// Runs one job: `output.solution` holds the warm start on entry and the result on exit.

@@ -5,8 +5,8 @@
 // restored from a checkpoint and fed the same further measurements stays bit-identical to the
 // original. A recovery job in flight is stored awaited (encoding waits for it; at most one job
 // of fixed iterations).
-// Section "NAVF", version 5 (v5 added NavFilterCounters::predictions_held; v4: one two-way
-// serialize function per type; v3 had hand-written put/get pairs), little-endian. Decoding checks every count against the bytes present and
+// Section "NAVF", version 6 (history: docs/consistency.md "Checkpoint section NAVF versions"),
+// little-endian. Decoding checks every count against the bytes present and
 // every index against the filter (blocks, images, links, sensors). The filter to restore into
 // is built from the same options first (they are not in the checkpoint: a changed config takes
 // effect on resume); on error it is left unchanged.
@@ -20,7 +20,7 @@
 namespace nav::daemon {
 
 inline constexpr std::uint32_t kNavFilterSectionTag = core::section_tag("NAVF");
-inline constexpr std::uint32_t kNavFilterSectionVersion = 5;
+inline constexpr std::uint32_t kNavFilterSectionVersion = 6;
 
 /// Adds the ESDF, BNDS, RCVY and NAVF sections.
 core::Status add_nav_filter_sections(const NavFilter& filter, core::SectionWriter* writer);

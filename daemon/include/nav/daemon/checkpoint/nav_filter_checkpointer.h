@@ -29,7 +29,7 @@
 
 namespace nav::daemon {
 
-inline constexpr std::uint32_t kNavFilterPayloadVersion = 3;  // 3: NAVF v5, 2: NAVF v4
+inline constexpr std::uint32_t kNavFilterPayloadVersion = 4;  // 4: NAVF v6, 3: NAVF v5
 /// "IDNT": what the checkpointed filter was fed (e.g. the replayed dive log), so that a
 /// checkpoint of another input is never resumed.
 inline constexpr std::uint32_t kInputIdentitySectionTag = core::section_tag("IDNT");
