@@ -168,7 +168,9 @@ TEST(Config, RovYamlLoads) {
   const auto* can = std::get_if<CanTransport>(&c.sensors[5].transport);
   ASSERT_NE(can, nullptr);
   EXPECT_EQ(can->interface, "can0");
-  EXPECT_TRUE(c.filter.recovery_thread);  // the vehicle runs CG beside the filter thread
+  EXPECT_TRUE(c.filter.recovery_thread);  // the vehicle recovers beside the filter thread
+  EXPECT_TRUE(c.filter.recovery_keep_factor_equal);  // with the factor kept equal to Λ
+  EXPECT_EQ(c.filter.recovery_refresh_interval, 10);
   EXPECT_DOUBLE_EQ(c.filter.registration_wait_s, 30.0);  // the vision stage answers later
   // Relative to rov.yaml's directory, loaded and validated with the config.
   EXPECT_EQ(can->signals_file, (config_dir() / "can/dvl_fog_example.yaml").string());
