@@ -64,11 +64,21 @@ std::function<void()> random_delays(unsigned seed) {
   };
 }
 
-/// Index just after the first image past `fraction` of the dive (a job is then in flight).
-std::size_t after_image(const std::vector<Measurement>& ms, double fraction) {
-  for (auto i = static_cast<std::size_t>(fraction * static_cast<double>(ms.size())); i < ms.size();
-       ++i) {
-    if (std::holds_alternative<ImageEvent>(ms[i])) return i + 1;
+/// Index just past the first measurement after the first image past `fraction` of the dive at
+/// which a job is in flight (the prediction that keeps the image's state submits it), found by
+/// a probe filter with options `o` (the schedule is a function of the data).
+std::size_t after_image(const Fixture& fx, const NavFilterOptions& o, double fraction) {
+  const auto& ms = fx.dive.measurements;
+  auto probe = fx.make(o);
+  const auto start = static_cast<std::size_t>(fraction * static_cast<double>(ms.size()));
+  bool image = false;
+  for (std::size_t i = 0; i < ms.size(); ++i) {
+    EXPECT_TRUE(probe->process(ms[i]).ok());
+    if (i >= start && std::holds_alternative<ImageEvent>(ms[i])) {
+      image = true;
+    } else if (image && probe->recovery_in_flight()) {
+      return i + 1;
+    }
   }
   return ms.size();
 }
@@ -109,7 +119,7 @@ TEST(RecoveryThread, CheckpointAndCopyWithAJobInFlightContinueBitIdentical) {
   o.recovery_executor = threaded_recovery_executor(
       [] { std::this_thread::sleep_for(std::chrono::milliseconds(20)); });
   for (double fraction : {0.3, 0.7}) {
-    const std::size_t cut = after_image(ms, fraction);
+    const std::size_t cut = after_image(fx, o, fraction);
     auto original = fx.make(o);
     for (std::size_t i = 0; i < cut; ++i) ASSERT_TRUE(original->process(ms[i]).ok());
     ASSERT_TRUE(original->recovery_in_flight()) << "cut " << cut;
@@ -135,7 +145,7 @@ TEST(RecoveryThread, ResumedWithoutTheThreadDropsTheJob) {
   const Fixture fx(30.0);
   const auto& ms = fx.dive.measurements;
   auto original = fx.make(fx.options);
-  const std::size_t cut = after_image(ms, 0.5);
+  const std::size_t cut = after_image(fx, fx.options, 0.5);
   for (std::size_t i = 0; i < cut; ++i) ASSERT_TRUE(original->process(ms[i]).ok());
   ASSERT_TRUE(original->recovery_in_flight());
   core::SectionSet set;
@@ -161,7 +171,7 @@ TEST(RecoveryThread, DestroyedWithASlowJobInFlightShutsDownCleanly) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
   });
   auto f = fx.make(o);
-  const std::size_t cut = after_image(ms, 0.5);
+  const std::size_t cut = after_image(fx, o, 0.5);
   for (std::size_t i = 0; i < cut; ++i) ASSERT_TRUE(f->process(ms[i]).ok());
   ASSERT_TRUE(f->recovery_in_flight());
   f.reset();  // lets the job in flight finish (it cannot be interrupted), then joins

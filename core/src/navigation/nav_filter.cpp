@@ -323,6 +323,7 @@ Status NavFilter::predict_once(double dt_s) {
     for (std::size_t row : pending_links_) links_[row].state_j = kept;
     pending_links_.clear();
     pending_image_ = -1;
+    if (jobs_.enabled()) submit_recovery_job();
   }
   return Status::Ok();
 }
@@ -434,10 +435,6 @@ Status NavFilter::on_image(const ImageEvent& image) {
   relinearise_robot();
   current.robot_mean = filter_.mean_block(Esdf::kRobotBlock);
   pending_image_ = static_cast<long>(images_.size()) - 1;
-  if (jobs_.enabled()) {
-    jobs_.submit(filter_.information(), filter_.information_vector(), recovery_.solution(),
-                 time_us_);
-  }
   return Status::Ok();
 }
 
@@ -450,6 +447,7 @@ Status NavFilter::finish() {
   const std::int64_t step_us = 100'000;  // 0.1 s: keeps the last image's state
   if (Status s = predict_once(1e-6 * static_cast<double>(step_us)); !s.ok()) return s;
   time_us_ += step_us;
+  if (recovery_in_flight()) take_recovery_result();  // the job of that kept state
   return Status::Ok();
 }
 

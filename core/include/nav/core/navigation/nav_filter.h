@@ -37,11 +37,11 @@
 //   pair up in the RegistrationTable, gate it and apply accepted links to the ESDF and to Σ~_ii
 //   (bounds update, constant time). The next prediction keeps the robot as this image's delayed
 //   state.
-// * Recovery executor (recovery_thread): after the image's links the filter submits a job on
-//   a snapshot of Λ, η and the warm start, and takes its result at data time t +
-//   recovery_handoff_s, the next image or finish(): the warm start becomes the result (what
-//   the robot did since stays in A and P, P moved by A (Σ'_tt − Σ_tt) Aᵀ) and the snapshot's
-//   delayed states take its mean. Outputs are bit-identical to synchronous hand-offs.
+// * Recovery executor (recovery_thread): after the prediction that keeps the image's state the
+//   filter submits a job on a snapshot of Λ, η and the warm start, and takes its result at
+//   data time t + recovery_handoff_s, the next image or finish(): the warm start becomes the
+//   result (A and P replayed from its Σ_tt, warm_start_tracker.h), its exact marginals reset
+//   the bounds, the snapshot's delayed states take its mean. Outputs are deterministic.
 // * Published solution (robot_mean(), robot_covariance()): the covariance is the certified robot
 //   bound B_rr of bounds.h, propagated with every prediction (F B Fᵀ + Q), Kalman-updated with
 //   every DVL, heading, depth and attitude measurement (a constant-time 12x12 recursion), reset
@@ -85,7 +85,7 @@ class NavFilter {
   /// fails (prediction breakdown); a rejected measurement is counted instead.
   Status process(const Measurement& m);
   /// End of data: takes the job in flight, expires pending pairs, keeps a pending image as a
-  /// delayed state (a 0.1 s prediction).
+  /// delayed state (a 0.1 s prediction) and takes that state's job.
   Status finish();
   /// One recovery now (as at an image, without link proposal), e.g. before a final analysis;
   /// false if it failed (counted). With an executor: takes the job in flight, runs one job on
@@ -153,7 +153,7 @@ class NavFilter {
   bool recover();
   void extend_warm_start();
   bool certify(const RecoveryResult& result);
-  void take_recovery_result();
+  void take_recovery_result(), submit_recovery_job();
   void propose_and_link(ImageRecord& current);
   LinkRecord try_link(const LinkHypothesis& h, const ImageRecord& current);
   /// Gates a registered pair (earlier block joint.state, later block `block_j`), applies it.
