@@ -5,10 +5,11 @@
 //
 // A job is one core::StateRecovery::solve on a SNAPSHOT of the information form (Λ, η) from a
 // warm start X = [μ | Σ_{*r}]; its result is a pure function of those inputs, so it is
-// bit-identical wherever and whenever it runs. The filter submits a job after an image's links
-// and takes the result at a DATA time (RecoverySchedule: the first measurement at or after the
-// snapshot's time plus the hand-off delay, the next image, or the end), never at a wall-clock
-// time, so its outputs do not depend on thread timing.
+// bit-identical wherever and whenever it runs. The filter submits a job after the prediction
+// that keeps an image's state (the image's links included) and takes the result at a DATA time
+// (RecoverySchedule: the first measurement at or after the snapshot's time plus the hand-off
+// delay, the next image, or the end), never at a wall-clock time, so its outputs do not depend
+// on thread timing.
 //
 // RecoveryExecutor is the seam: InlineRecoveryExecutor (here) runs each job on the caller when
 // its result is first asked for; navd's RecoveryWorker (daemon/filter/recovery_worker.h) runs
