@@ -79,9 +79,7 @@ bool NavFilter::recover_now() {
   if (!initialised_) return false;
   if (!jobs_.enabled()) return recover();
   if (recovery_in_flight()) take_recovery_result();
-  extend_warm_start();
-  jobs_.submit(filter_.information(), filter_.information_vector(), recovery_.solution(),
-               time_us_);
+  submit_recovery_job();  // restarts the tracker: no step lies between this job and now
   take_recovery_result();
   const RecoveryResult result =
       recovery_.solve(filter_.information(), filter_.information_vector());
@@ -92,8 +90,8 @@ void NavFilter::submit_recovery_job() {
   // Right after the prediction that keeps the image's state: the snapshot's robot then has that
   // state as its only neighbour (the image's links are edges of the kept state). Submitted
   // before that prediction, the robot's link edges made the kept factor delete and re-add the
-  // rows of every state linked at the image, deep in the factor: 2.3x the job's time on the
-  // default dive (docs/consistency.md "The recovery thread made tight").
+  // rows of every state linked at the image, deep in the factor: the default dive's replay took
+  // 232.6 s instead of 122.3 s (docs/consistency.md "The recovery thread made tight").
   extend_warm_start();
   warm_.restart(recovery_.robot_covariance());  // the steps from here extend the job's result
   jobs_.submit(filter_.information(), filter_.information_vector(), recovery_.solution(), time_us_);
