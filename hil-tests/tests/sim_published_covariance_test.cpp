@@ -71,9 +71,7 @@ TEST(SimPublishedCovariance, IsTheExactRobotMarginalWithTheKeptFactor) {
   const auto dir = scratch_dir("published_covariance");
   simulate_dive(sim_options(dir, 2, 40), sim_config_path().string());
   daemon::NavdConfig cfg = daemon::load_config_file((dir / "config.yaml").string());
-  cfg.filter.recovery_preconditioner = core::RecoveryPreconditioner::kFactor;
-  cfg.filter.recovery_keep_factor_equal = true;
-  cfg.filter.recovery_refresh_interval = 1;
+  use_kept_factor(cfg, 1);
   const TruthTable truth = read_truth(dir);
   Comparison c;
   std::int64_t calls = 0;
@@ -124,9 +122,7 @@ TEST(SimPublishedCovariance, StaysConservativeAtEveryMeasurementBetweenRenewals)
   so.oracle.outlier_rate = 0.2;
   simulate_dive(so, sim_config_path().string());
   daemon::NavdConfig cfg = daemon::load_config_file((dir / "config.yaml").string());
-  cfg.filter.recovery_preconditioner = core::RecoveryPreconditioner::kFactor;
-  cfg.filter.recovery_keep_factor_equal = true;
-  cfg.filter.recovery_refresh_interval = 10;
+  use_kept_factor(cfg, 10);
   int checked = 0, conservative = 0;
   double worst = 0.0;
   daemon::ReplayOptions ro;

@@ -36,9 +36,7 @@ core::TimeOfUseStats checked_dive(const std::string& name, bool recovery_thread)
   so.oracle.outlier_rate = 0.05;
   simulate_dive(so, sim_config_path().string());
   daemon::NavdConfig cfg = daemon::load_config_file((dir / "config.yaml").string());
-  cfg.filter.recovery_preconditioner = core::RecoveryPreconditioner::kFactor;
-  cfg.filter.recovery_keep_factor_equal = true;
-  cfg.filter.recovery_refresh_interval = 10;
+  use_kept_factor(cfg, 10);
   cfg.filter.recovery_thread = recovery_thread;
   daemon::ReplayOptions ro;
   ro.dead_reckoning = false;

@@ -18,7 +18,6 @@ void run_recovery_job(StateRecovery& recovery, const InformationMatrix& lambda,
   }
   output.result = recovery.solve(lambda, eta);
   output.solution = recovery.solution();
-  output.marginals.resize(0, 0);
   const ExactMarginals* exact = recovery.refreshed_marginals();
   if (!output.result.status.ok() || !output.result.refreshed || exact == nullptr) return;
   const int d = exact->block_dim();
