@@ -141,7 +141,8 @@ class PointTransfer {
       dX_du(1, 1) = d / camera_.fy_px;
       const Eigen::Matrix2d Ju = Jp * R_j_i_ * dX_du;
       Eigen::Matrix2d S = Jx * prior_.covariance * Jx.transpose() +
-                          sigma2 * (Ju * Ju.transpose() + Eigen::Matrix2d::Identity());
+                          sigma2 * (Ju * Ju.transpose() + Eigen::Matrix2d::Identity()) +
+                          floor2_ * Eigen::Matrix2d::Identity();
       S = 0.5 * (S + S.transpose()).eval();
       out.centres_px.emplace_back(camera_.fx_px * X.x() * iz + camera_.cx_px,
                                   camera_.fy_px * X.y() * iz + camera_.cy_px);
@@ -166,6 +167,7 @@ class PointTransfer {
   std::array<Eigen::Matrix3d, 3> dR_j_i_;
   Eigen::Vector3d t_i_j_;
   double depth_near_m_ = 0.0, depth_far_m_ = 0.0;
+  double floor2_ = options_.band_floor_sigma_px * options_.band_floor_sigma_px;
 };
 
 /// Uniform bucket grid of points (compressed rows: cell_start, then point indices by cell).

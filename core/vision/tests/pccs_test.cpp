@@ -127,6 +127,34 @@ TEST(Pccs, RegionIsTheEpipolarSegmentOverTheDepthInterval) {
   EXPECT_FALSE(r.contains(mid + 3.0 * Eigen::Vector2d(-along.y(), along.x())));
 }
 
+TEST(Pccs, BandFloorAddsItsVarianceToEveryEllipse) {
+  // The floor adds sigma^2 I to every S and moves no centre: a point 3 px off the line, outside
+  // the exact band, is inside once the floor is 2 px (gate sqrt(g) ~ 3.9 sigma), and the
+  // band's half-width across the line grows to sqrt(g (S_nn + floor^2)).
+  const RelativePosePrior prior = prior_around(test::default_x_i_j(), Mat6::Zero());
+  PccsOptions options;
+  options.pixel_sigma_px = 1e-3;
+  const CameraIntrinsics cam = test::sim_camera();
+  const Eigen::Vector2d u_i(300.0, 700.0);
+  const SearchRegion exact = search_region(u_i, cam, prior, options);
+  options.band_floor_sigma_px = 2.0;
+  const SearchRegion floored = search_region(u_i, cam, prior, options);
+  ASSERT_EQ(exact.centres_px.size(), floored.centres_px.size());
+  for (std::size_t k = 0; k < exact.centres_px.size(); ++k) {
+    EXPECT_EQ(exact.centres_px[k], floored.centres_px[k]);
+    EXPECT_TRUE(floored.covariances_px2[k].isApprox(
+        exact.covariances_px2[k] + 4.0 * Eigen::Matrix2d::Identity(), 1e-12));
+  }
+  const Eigen::Vector2d mid = 0.5 * (exact.centres_px[3] + exact.centres_px[4]);
+  const Eigen::Vector2d along = (exact.centres_px[4] - exact.centres_px[3]).normalized();
+  const Eigen::Vector2d normal(-along.y(), along.x());
+  EXPECT_FALSE(exact.contains(mid + 3.0 * normal));
+  EXPECT_TRUE(floored.contains(mid + 3.0 * normal));
+  const double half_width = std::sqrt(floored.gate_chi2 * 4.0);  // S ~ floor^2 I here
+  EXPECT_TRUE(floored.contains(mid + 0.99 * half_width * normal));
+  EXPECT_FALSE(floored.contains(mid + 1.01 * half_width * normal));
+}
+
 /// Features of a scene with descriptors: each point's descriptor is prototype + unique part,
 /// each observation adds its own noise; `distractors` unmatched features per image.
 struct FeaturePair {

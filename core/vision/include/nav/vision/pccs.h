@@ -23,6 +23,13 @@
 // the error along the epipolar line is absorbed by the depth freedom, so only the 1-D error
 // across the line is really gated (with a 2-D threshold).
 //
+// Floor. A prior much tighter than the features' repeatability gives a band of a pixel or two
+// around the epipolar line. Every candidate in it fits the prior's epipolar geometry, true or
+// not, so where the images share few true correspondences the robust fit cannot tell the false
+// ones, which then bias the pose by degrees while counting as inliers. band_floor_sigma_px
+// adds sigma^2 I to every S: the band is then several times wider than the essential matrix's
+// inlier gate, and a false candidate lands in that gate by chance only.
+//
 // Matching. Only candidates inside the region are compared (L2 descriptor distance); the best
 // candidate of u_i is kept when best < ratio * second best among the candidates of its region
 // (a lone candidate passes), and, with `mutual`, when u_i is also the best of u_j among all i
@@ -43,6 +50,8 @@ struct PccsOptions {
   double confidence = 0.999;    ///< Probability that the true correspondence is in its region.
   double ratio = 0.8;           ///< Lowe ratio test inside the region (best < ratio * second).
   double pixel_sigma_px = 0.5;  ///< Feature localisation noise, each image, each axis.
+  /// Floor of the band's width: sigma^2 I added to every S, px (header comment "Floor").
+  double band_floor_sigma_px = 0.0;
   int depth_samples = 8;        ///< Sub-segments of the depth interval (>= 1).
   double min_depth_m = 0.05;    ///< Near end of the depth interval is clamped to this.
   int grid_cell_px = 32;        ///< Bucket size of image j's point index.

@@ -36,7 +36,15 @@ struct RegistrationOptions {
   PreprocessOptions preprocess;
   FeatureOptions features;
   MatchingOptions matching;
-  PccsOptions pccs;
+  /// PCCS with its band floored at 40 px sigma: a tight prior (exact marginals) otherwise
+  /// narrows the band until ambiguous candidates pass the ratio test, and the pose they give is
+  /// wrong by degrees under a covariance that claims tenths (pccs.h "Floor"; docs/performance.md
+  /// "A floor under the search band").
+  PccsOptions pccs = [] {
+    PccsOptions o;
+    o.band_floor_sigma_px = 40.0;
+    return o;
+  }();
   EssentialOptions essential;
   /// Refinement. Its pure-rotation floor is EssentialOptions::min_parallax_px (0.25 px) rather
   /// than 3 sigma: slow survey pairs (Sparus consecutive frames, median derotated parallax
