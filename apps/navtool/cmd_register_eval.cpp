@@ -4,21 +4,7 @@
 // --min-relative-return: how lit; --overlap-of-footprint: of the smaller lit footprint instead of
 // the image; --flat-overlap: of the flat footprints at the depth below each camera), with a prior
 // from the truth plus a stated covariance (register_eval.h), multi-threaded over frames and pairs.
-//   navtool register-eval DIVE [--frames N] [--min-overlap F] [--flat-overlap]
-//                          [--min-relative-return R] [--overlap-of-footprint] [--threads T]
-//                          [--reliability DELTA0] [--max-leverage H] [--pixel-sigma-px S]
-//                          [--model-sigma-deg D] [--systematic-noise-fraction F] [--json]
-//                          [--draw OUT.png] [--draw-scale S]
-// --json prints one object: frames, min_overlap, overlap ("visible" or "flat"),
-// min_relative_return, overlap_of ("image" or "footprint"), pairs,
-// successes, success_fraction,
-// median_rotation_error_deg, median_baseline_direction_error_deg, nees_mean, nees_median,
-// wrong (NEES > chi2_5^-1(0.999)), wrong_fraction (of the successes), failures {reason: count},
-// prior {position_sigma_m, angle_sigma_deg, depth_sigma_fixed_m, depth_sigma_fraction},
-// fig4 {true_correspondences, missed_exact, missed_bound, missed_overconfident,
-// pairs_missed_exact, pairs_missed_bound, pairs_missed_overconfident, pairs_counted,
-// bound_inflation, overconfidence}, timing {features_cpu_ms_median, pair_cpu_ms_median,
-// pair_wall_ms_median}. Unreadable dive: message, exit status 1.
+// Options: `navtool register-eval --help`; the --json summary's keys: docs/tools.md.
 #include <time.h>
 
 #include <nlohmann/json.hpp>
@@ -72,6 +58,7 @@ struct EvalArgs {
   double max_sigma_deg = validation.max_sigma_rad * kDeg;
   double model_sigma_deg = vision::RegistrationOptions{}.refinement.model_sigma_rad * kDeg;
   double pixel_sigma_px = vision::RegistrationOptions{}.refinement.pixel_sigma_px;
+  double band_floor_sigma_px = vision::RegistrationOptions{}.pccs.band_floor_sigma_px;
   double residual_sigma_factor = vision::RegistrationOptions{}.refinement.residual_sigma_factor;
   double systematic_fraction = vision::RegistrationOptions{}.refinement.systematic_noise_fraction;
   bool fixed_kink = false;
@@ -283,6 +270,7 @@ json summarise(const EvalArgs& args, const Dive& dive, const std::vector<PairTru
       {"prior",
        {{"position_sigma_m", args.pair.prior_position_sigma_m},
         {"angle_sigma_deg", args.pair.prior_angle_sigma_rad * kDeg},
+        {"band_floor_sigma_px", args.band_floor_sigma_px},
         {"depth_sigma_fixed_m", args.pair.depth_sigma_fixed_m},
         {"depth_sigma_fraction", args.pair.depth_sigma_fraction}}},
       {"fig4",
@@ -351,6 +339,7 @@ void run_register_eval(const EvalArgs& args) {
   options.refinement.residual_sigma_factor = args.residual_sigma_factor;
   options.refinement.systematic_noise_fraction = args.systematic_fraction;
   options.refinement.kink_at_measured_noise = !args.fixed_kink;
+  options.pccs.band_floor_sigma_px = args.band_floor_sigma_px;
   const vision::Registration registration(dive.camera, options);
   const int n = static_cast<int>(dive.frames.size());
   std::vector<vision::ImageFeatures> features(static_cast<std::size_t>(n));
@@ -441,6 +430,14 @@ void add_register_eval(CLI::App& app) {
       ->check(CLI::Range(1, 64));
   cmd->add_option("--prior-sigma-m", args->pair.prior_position_sigma_m,
                   "prior position sigma, each axis (default 0.25 m)");
+  cmd->add_option_function<double>(
+         "--prior-angle-sigma-deg",
+         [args](double deg) { args->pair.prior_angle_sigma_rad = deg * std::numbers::pi / 180.0; },
+         "prior roll, pitch and heading sigma, each (default 0.5 deg)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--band-floor-px", args->band_floor_sigma_px,
+                  "floor of the PCCS band, sigma px (pccs.h; default: registration.h)")
+      ->check(CLI::Range(0.0, 100.0));
   cmd->add_option("--seed", args->pair.seed, "seed of the prior draws (default 1)");
   cmd->add_option("--reliability", args->reliability_delta0,
                   "add to each covariance the shift of undetectable blunders of this "
