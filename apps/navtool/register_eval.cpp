@@ -85,7 +85,8 @@ void count_fig4_misses(const vision::Registration& registration, const vision::I
                        const vision::RelativePosePrior& prior, const PairEvalOptions& o,
                        PairEval& e) {
   const vision::CameraIntrinsics& camera = registration.camera();
-  const vision::PccsOptions& pccs = registration.options().pccs;
+  vision::PccsOptions pccs = registration.options().pccs;
+  pccs.band_floor_sigma_px = 0.0;  // the band of the covariance alone (register_eval.h)
   const double scale[3] = {1.0, o.bound_inflation, 1.0 / o.overconfidence};
   const auto truths = true_correspondences(fi, fj, camera, truth.x_i_j, o.max_true_error_px);
   e.true_correspondences = static_cast<int>(truths.size());

@@ -14,7 +14,8 @@
 //   true pose confirms: reprojection of their triangulated point within max_true_error_px in
 //   image j, in front of both cameras) that fall outside the PCCS search region built with the
 //   prior mean and covariance (a) P, (b) bound_inflation * P (a conservative bound, as the
-//   filter's recovered covariance is), (c) P / overconfidence (Markov-blanket-like).
+//   filter's recovered covariance is), (c) P / overconfidence (Markov-blanket-like), each
+//   without the registration's band floor (pccs.h "Floor"), which would hide the covariance.
 #include <cstdint>
 #include <string>
 
