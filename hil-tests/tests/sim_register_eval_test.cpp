@@ -3,7 +3,8 @@
 // those by flat footprints, half of those whose frames see the same surface), and its
 // Fig. 4 counts show the PCCS band of the exact prior keeping the true correspondences that an
 // over-confident prior (covariance / 10) loses. The full-survey numbers are in
-// docs/performance.md ("Image registration"), from the same command on >= 300 frames.
+// docs/performance.md ("Image registration"), from the same command on >= 300 frames. A tight
+// prior needs the band floor (the second test).
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -58,6 +59,34 @@ TEST(SimRegisterEval, TinyRenderedDiveRegistersAndPccsBandHoldsTheTrueCorrespond
   EXPECT_GE(jv["pairs"].get<int>(), 3) << v.out;
   EXPECT_LT(jv["pairs"].get<int>(), pairs) << v.out;
   EXPECT_GE(2 * jv["successes"].get<int>(), jv["pairs"].get<int>()) << v.out;
+}
+
+// A prior as tight as the kept factor's bounds (0.02 m, 0.05 deg) on the first 40 frames, pairs
+// down to 10 % overlap: without the band floor the band is so narrow that ambiguous candidates
+// pass the ratio test and weak pairs register wrong (5 of 40 when written); with the
+// registration's floor (40 px, registration.h) they are refused or right (0 of 43).
+// docs/performance.md "A floor under the search band" has the same on 160 frames.
+TEST(SimRegisterEval, TightPriorNeedsTheBandFloor) {
+  const auto dir = scratch_dir("register_eval_tight");
+  const tool::test::NavtoolOutput sim =
+      tool::test::run_navtool("simulate --out '" + dir.string() + "' --images 40 --render-images");
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const auto run = [&](const std::string& floor) {
+    const tool::test::NavtoolOutput r = tool::test::run_navtool(
+        "register-eval '" + dir.string() +
+        "' --json --threads 1 --min-overlap 0.1 --fig4-every 1000 --prior-sigma-m 0.02 "
+        "--prior-angle-sigma-deg 0.05" +
+        floor);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return nlohmann::json::parse(r.out);
+  };
+  const nlohmann::json bare = run(" --band-floor-px 0"), floored = run("");
+  EXPECT_EQ(floored["prior"]["band_floor_sigma_px"].get<double>(), 40.0);
+  const int wrong_bare = bare["wrong"].get<int>(), wrong = floored["wrong"].get<int>();
+  ASSERT_GE(floored["successes"].get<int>(), 30) << floored.dump();
+  EXPECT_GE(wrong_bare, 2) << "the hazard the floor guards against: " << bare.dump();
+  EXPECT_LE(20 * wrong, floored["successes"].get<int>()) << floored.dump();
+  EXPECT_LT(wrong, wrong_bare);
 }
 
 }  // namespace
