@@ -37,6 +37,7 @@ vision:
   min_inliers: 25
   max_sigma_deg: 1.5
   uncertain_min_inliers: 80
+  band_floor_sigma_px: 25
 )");
   const VisionConfig& v = c.vision;
   EXPECT_TRUE(v.enabled);
@@ -57,6 +58,7 @@ vision:
   EXPECT_EQ(v.min_inliers, 25);
   EXPECT_EQ(v.max_sigma_deg, 1.5);
   EXPECT_EQ(v.uncertain_min_inliers, 80);
+  EXPECT_EQ(v.band_floor_sigma_px, 25.0);
   const VisionConfig defaults = parse_config(kSensors).vision;
   EXPECT_FALSE(defaults.max_leverage.has_value());
   // The loop's noise model, not the registration pipeline's (vision_config.h).
@@ -67,6 +69,7 @@ vision:
   EXPECT_FALSE(defaults.min_inliers.has_value());
   EXPECT_FALSE(defaults.max_sigma_deg.has_value());
   EXPECT_FALSE(defaults.uncertain_min_inliers.has_value());
+  EXPECT_FALSE(defaults.band_floor_sigma_px.has_value());
 }
 
 TEST(VisionConfig, OutOfRangeAndUnknownKeysNameTheKey) {
@@ -87,6 +90,13 @@ TEST(VisionConfig, OutOfRangeAndUnknownKeysNameTheKey) {
     FAIL() << "min_inliers 2 accepted";
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("vision.min_inliers"), std::string::npos) << e.what();
+  }
+  try {
+    parse_config(kSensors + "vision: {band_floor_sigma_px: -1}\n", "t.yaml");
+    FAIL() << "a negative band floor accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("vision.band_floor_sigma_px"), std::string::npos)
+        << e.what();
   }
   try {
     parse_config(kSensors + "vision: {thread: 2}\n", "t.yaml");

@@ -173,7 +173,7 @@ VisionConfig parse_vision(const YamlReader& v) {
                 "image_dir", "image_width_px", "image_height_px", "depth_sigma_fraction",
                 "depth_sigma_floor_m", "max_leverage", "pixel_sigma_px", "residual_sigma_factor",
                 "model_sigma_deg", "systematic_noise_fraction", "min_inliers", "max_sigma_deg",
-                "uncertain_min_inliers"});
+                "uncertain_min_inliers", "band_floor_sigma_px"});
   VisionConfig vision;
   if (v.has("enabled")) vision.enabled = v.at("enabled").as_bool();
   v.read("threads", vision.threads, 1, 64);
@@ -198,6 +198,7 @@ VisionConfig parse_vision(const YamlReader& v) {
   vision.max_leverage = read_optional("max_leverage", 1e-6, 1.0);
   vision.min_inliers = read_optional("min_inliers", 5, 100000);
   vision.max_sigma_deg = read_optional("max_sigma_deg", 1e-3, 180.0);
+  vision.band_floor_sigma_px = read_optional("band_floor_sigma_px", 0.0, 1000.0);
   vision.uncertain_min_inliers = read_optional("uncertain_min_inliers", 5, 100000);
   return vision;
 }

@@ -97,6 +97,7 @@ VisionLink::VisionLink(const NavdConfig& config, std::string image_dir, Mode mod
   options.refinement.systematic_noise_fraction = config_.systematic_noise_fraction;
   if (config_.min_inliers) options.validation.min_inliers = *config_.min_inliers;
   if (config_.max_sigma_deg) options.validation.max_sigma_rad = *config_.max_sigma_deg * kRad;
+  if (config_.band_floor_sigma_px) options.pccs.band_floor_sigma_px = *config_.band_floor_sigma_px;
   if (config_.uncertain_min_inliers)
     options.validation.uncertain_min_inliers = *config_.uncertain_min_inliers;
   registration_ = std::make_unique<nav::vision::Registration>(intrinsics, options);

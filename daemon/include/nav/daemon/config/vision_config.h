@@ -46,6 +46,10 @@ struct VisionConfig {
   std::optional<int> min_inliers;
   std::optional<double> max_sigma_deg;
   std::optional<int> uncertain_min_inliers;
+  /// The pose-constrained search band's floor, sigma px, [0, 1000] (nav/vision/pccs.h "Floor");
+  /// empty: the registration pipeline's default (40 px, for frames of about 1000 px focal
+  /// length: scale it with the focal length).
+  std::optional<double> band_floor_sigma_px;
 };
 
 }  // namespace nav::daemon
