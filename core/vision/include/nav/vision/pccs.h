@@ -24,11 +24,11 @@
 // across the line is really gated (with a 2-D threshold).
 //
 // Floor. A prior much tighter than the features' repeatability gives a band of a pixel or two
-// around the epipolar line. Every candidate in it fits the prior's epipolar geometry, true or
-// not, so where the images share few true correspondences the robust fit cannot tell the false
-// ones, which then bias the pose by degrees while counting as inliers. band_floor_sigma_px
-// adds sigma^2 I to every S: the band is then several times wider than the essential matrix's
-// inlier gate, and a false candidate lands in that gate by chance only.
+// around the epipolar line. An ambiguous candidate (repeated texture, a neighbouring corner) is
+// then alone in its region and passes the ratio test for lack of competitors; a few such
+// matches decide the pose of a weak pair (few inliers on a small patch), wrong by degrees under
+// a covariance of tenths. band_floor_sigma_px adds sigma^2 I to every S, so that the ratio test
+// sees the candidates around the line again while the prior still shortens the band along it.
 //
 // Matching. Only candidates inside the region are compared (L2 descriptor distance); the best
 // candidate of u_i is kept when best < ratio * second best among the candidates of its region
