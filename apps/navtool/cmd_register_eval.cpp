@@ -432,7 +432,7 @@ void add_register_eval(CLI::App& app) {
                   "prior position sigma, each axis (default 0.25 m)");
   cmd->add_option_function<double>(
          "--prior-angle-sigma-deg",
-         [args](double deg) { args->pair.prior_angle_sigma_rad = deg * std::numbers::pi / 180.0; },
+         [args](double deg) { args->pair.prior_angle_sigma_rad = deg / kDeg; },
          "prior roll, pitch and heading sigma, each (default 0.5 deg)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--band-floor-px", args->band_floor_sigma_px,
