@@ -415,24 +415,53 @@ Status KeptEqualFactor::update(const InformationMatrix& lambda) {
 void KeptEqualFactor::apply(const Eigen::Ref<const Eigen::MatrixXd>& R,
                             Eigen::Ref<Eigen::MatrixXd> Z) const {
   const int d = factored_.block_dim();
-  const auto n = static_cast<Eigen::Index>(factor_->L->n);
-  scatter_.setZero(n, R.cols());
+  scatter_.setZero(static_cast<Eigen::Index>(factor_->L->n), R.cols());
   for (int b = 0; b < factored_.num_blocks(); ++b) {
     scatter_.middleRows(slot_row(b, 0), d) = R.middleRows(static_cast<Eigen::Index>(b) * d, d);
   }
+  solve_slots(CHOLMOD_A, Z);
+}
+
+void KeptEqualFactor::solve_robot_columns(Eigen::Ref<Eigen::MatrixXd> Z) const {
+  const int d = factored_.block_dim();
+  const int first = slot_row(0, 0);
+  const auto* p = static_cast<const int*>(factor_->L->p);
+  const auto* nz = static_cast<const int*>(factor_->L->nz);
+  const auto* row = static_cast<const int*>(factor_->L->i);
+  const auto* x = static_cast<const double*>(factor_->L->x);
+  // The robot's diagonal block of L D Lᵀ: unit lower L_rr and D_r (each column of a simplicial
+  // LDLᵀ factor starts with its D entry; the robot's columns have no rows below its block).
+  Eigen::MatrixXd unit_lower = Eigen::MatrixXd::Identity(d, d);
+  Eigen::VectorXd pivots(d);
+  for (int j = 0; j < d; ++j) {
+    const int start = p[first + j];
+    pivots[j] = x[start];
+    for (int k = start + 1; k < start + nz[first + j]; ++k) unit_lower(row[k] - first, j) = x[k];
+  }
+  // Forward and diagonal passes: D_r⁻¹ L_rr⁻¹ in the robot's rows, zero above them.
+  const Eigen::MatrixXd inverse =
+      unit_lower.triangularView<Eigen::UnitLower>().solve(Eigen::MatrixXd::Identity(d, d));
+  scatter_.setZero(static_cast<Eigen::Index>(factor_->L->n), d);
+  scatter_.middleRows(first, d) = pivots.cwiseInverse().asDiagonal() * inverse;
+  solve_slots(CHOLMOD_Lt, Z);  // the backward pass Lᵀ X = ·
+}
+
+void KeptEqualFactor::solve_slots(int sys, Eigen::Ref<Eigen::MatrixXd> Z) const {
+  const int d = factored_.block_dim();
+  const Eigen::Index n = scatter_.rows(), m = scatter_.cols();
   cholmod_dense rhs{};
   rhs.nrow = rhs.d = static_cast<size_t>(n);
-  rhs.ncol = static_cast<size_t>(R.cols());
+  rhs.ncol = static_cast<size_t>(m);
   rhs.nzmax = static_cast<size_t>(scatter_.size());
   rhs.x = scatter_.data();
   rhs.xtype = CHOLMOD_REAL;
   rhs.dtype = CHOLMOD_DOUBLE;
-  cholmod_dense* x = cholmod_solve(CHOLMOD_A, factor_->L, &rhs, &factor_->c);
+  cholmod_dense* x = cholmod_solve(sys, factor_->L, &rhs, &factor_->c);
   if (x == nullptr) {
     Z.setZero();  // PCG then stalls and the residual reports it
     return;
   }
-  const Eigen::Map<const Eigen::MatrixXd> X(static_cast<const double*>(x->x), n, R.cols());
+  const Eigen::Map<const Eigen::MatrixXd> X(static_cast<const double*>(x->x), n, m);
   for (int b = 0; b < factored_.num_blocks(); ++b) {
     Z.middleRows(static_cast<Eigen::Index>(b) * d, d) = X.middleRows(slot_row(b, 0), d);
   }

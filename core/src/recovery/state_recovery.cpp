@@ -243,8 +243,7 @@ void StateRecovery::note_convergence(RecoveryResult& result, const PcgSummary& s
 }
 
 RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Preconditioner& M,
-                                         const Eigen::VectorXd& eta, int iteration_cap,
-                                         bool m_equals_a) {
+                                         const Eigen::VectorXd& eta, int iteration_cap) {
   RecoveryResult result;
   result.mode = options_.mode;
   result.refactored_blocks = preconditioner_.num_blocks();
@@ -253,8 +252,7 @@ RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Preconditio
   if (iteration_cap >= 0 && options_.mode == RecoveryMode::kFixedIterations) {
     pcg.max_iterations = std::min(pcg.max_iterations, iteration_cap);
   }
-  const PcgSummary summary = m_equals_a ? solve_refinement(A, M, rhs_, solution_, pcg, workspace_)
-                                        : solve_pcg(A, M, rhs_, solution_, pcg, workspace_);
+  const PcgSummary summary = solve_pcg(A, M, rhs_, solution_, pcg, workspace_);
   result.status = summary.status;
   result.iterations = summary.iterations;
   if (summary.residual_norm.size() == rhs_.cols()) {
@@ -265,6 +263,45 @@ RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Preconditio
     set_spectral(result, R.transpose() * R);
   }
   note_convergence(result, summary);
+  return result;
+}
+
+RecoveryResult StateRecovery::solve_kept(const SpdOperator& A, const Eigen::VectorXd& eta) {
+  RecoveryResult result;
+  result.mode = options_.mode;
+  fill_rhs(eta);
+  PcgOptions pcg = pcg_options();
+  if (options_.mode == RecoveryMode::kFixedIterations) {
+    pcg.max_iterations = std::min(pcg.max_iterations, options_.iterations_after_refresh);
+  }
+  // μ by refinement of the warm start; Σ_{*r} = Λ⁻¹ E_r directly (one backward pass per
+  // column), refined as well only when that leaves a residual above the mode's target (on badly
+  // conditioned Λ a refinement is more accurate than the direct solve).
+  const int d = block_dim_;
+  const double target = options_.mode == RecoveryMode::kTolerance ? options_.relative_tolerance
+                                                                  : options_.refresh_residual;
+  const PcgSummary mean =
+      solve_refinement(A, kept_, rhs_.leftCols(1), solution_.leftCols(1), pcg, workspace_);
+  result.status = mean.status;
+  result.iterations = mean.iterations;
+  if (!result.status.ok()) return result;
+  if (pcg.max_iterations > 0) kept_.solve_robot_columns(solution_.rightCols(d));
+  column_residual_.resize(solution_.rows(), d);
+  A.multiply(solution_.rightCols(d), column_residual_);
+  column_residual_ = rhs_.rightCols(d) - column_residual_;
+  Eigen::VectorXd column_norm = column_residual_.colwise().norm().transpose();
+  if (pcg.max_iterations > 0 && !(column_norm.maxCoeff() <= target)) {
+    const PcgSummary column =
+        solve_refinement(A, kept_, rhs_.rightCols(d), solution_.rightCols(d), pcg, workspace_);
+    result.status = column.status;
+    if (!result.status.ok()) return result;
+    column_residual_ = workspace_.R.topLeftCorner(solution_.rows(), d);
+    column_norm = column.residual_norm;
+  }
+  Eigen::VectorXd residual_norm(1 + d);
+  residual_norm << mean.residual_norm[0], column_norm;
+  finish(result, residual_norm, rhs_.colwise().norm().transpose());
+  set_spectral(result, column_residual_.transpose() * column_residual_);
   return result;
 }
 
@@ -292,14 +329,15 @@ RecoveryResult StateRecovery::solve_factor(const InformationMatrix& lambda,
   result.status = kept ? update_kept(lambda, missed)
                        : factor_.update_trailing(lambda);
   if (!result.status.ok()) return result;
-  const Preconditioner& M = kept ? static_cast<const Preconditioner&>(kept_) : factor_;
-  const int cap = refresh || kept ? options_.iterations_after_refresh : -1;
+  const int cap = refresh ? options_.iterations_after_refresh : -1;
+  const auto solve = [&](const SpdOperator& A) {
+    return kept ? solve_kept(A, eta) : solve_with(A, factor_, eta, cap);
+  };
   if (options_.kernel == RecoveryKernel::kPacked) {
     packed_operator_.refresh(lambda);
-    result = solve_with(PackedSpdOperator(packed_operator_, packed_rhs_, packed_solution_), M, eta,
-                        cap, kept);
+    result = solve(PackedSpdOperator(packed_operator_, packed_rhs_, packed_solution_));
   } else {
-    result = solve_with(InformationOperator(lambda), M, eta, cap, kept);
+    result = solve(InformationOperator(lambda));
   }
   const KeptFactorUpdate& u = kept_.last_update();
   result.refactored_blocks =

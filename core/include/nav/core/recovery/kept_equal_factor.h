@@ -87,6 +87,10 @@ class KeptEqualFactor final : public Preconditioner {
   /// Z = Λ⁻¹ R with the factor (R and Z of dim() rows).
   void apply(const Eigen::Ref<const Eigen::MatrixXd>& R,
              Eigen::Ref<Eigen::MatrixXd> Z) const override;
+  /// Z = Λ⁻¹ E_r, the robot's covariance column (dim() x block_dim). The robot holds the last
+  /// slot, so L⁻¹ E_r is zero above its rows: the forward pass is a dense block_dim² solve and
+  /// only the backward pass reads the whole factor (half of apply(E_r)'s work).
+  void solve_robot_columns(Eigen::Ref<Eigen::MatrixXd> Z) const;
 
  private:
   struct Cholmod;
@@ -95,6 +99,8 @@ class KeptEqualFactor final : public Preconditioner {
   void add_block(const InformationMatrix& lambda, int block);
   bool rank_update(const InformationMatrix& lambda, const std::vector<int>& changed);
   void copy_rows(const InformationMatrix& lambda, const std::vector<int>& rows);
+  /// Λ⁻¹ of a right-hand side given in slot space into block space.
+  void solve_slots(int sys, Eigen::Ref<Eigen::MatrixXd> Z) const;
 
   std::unique_ptr<Cholmod> factor_;
   InformationMatrix factored_{1};  // Λ as the factor holds it

@@ -25,7 +25,9 @@
 // stagnates on badly conditioned Λ): the result carries hit_iteration_cap and the residual,
 // from which the certified bounds (bounds.h) stay conservative (only looser). Preconditioners:
 // block Jacobi, or a Cholesky factor of Λ refreshed every few steps (factor_preconditioner.h)
-// or kept equal to Λ by modifications at every step (kept_equal_factor.h).
+// or kept equal to Λ by modifications at every step (kept_equal_factor.h). With the kept factor
+// Σ_{*r} is solved directly rather than from its warm start: the robot's rows are the factor's
+// last, so the solve reads the factor once instead of twice (solve_kept).
 //
 // Not thread-safe: owned by the recovery thread. No clocks (time it from the caller).
 
@@ -91,11 +93,13 @@ class StateRecovery {
 
  private:
   /// `iteration_cap` >= 0 lowers the fixed-iteration budget of this solve (-1: none).
-  /// `m_equals_a`: M is a factor of A itself (the kept factor): iterative refinement, which
-  /// takes PCG's step at one product less (pcg.h solve_refinement).
   RecoveryResult solve_with(const SpdOperator& A, const Preconditioner& M,
-                            const Eigen::VectorXd& eta, int iteration_cap = -1,
-                            bool m_equals_a = false);
+                            const Eigen::VectorXd& eta, int iteration_cap = -1);
+  /// With the kept factor (M = Λ): μ by iterative refinement (pcg.h solve_refinement), capped
+  /// at iterations_after_refresh; Σ_{*r} solved directly (KeptEqualFactor::solve_robot_columns)
+  /// and refined too when its relative residual exceeds relative_tolerance (kTolerance) or
+  /// refresh_residual (kFixedIterations). The residuals are the true ones.
+  RecoveryResult solve_kept(const SpdOperator& A, const Eigen::VectorXd& eta);
   RecoveryResult solve_factor(const InformationMatrix& lambda, const Eigen::VectorXd& eta);
   /// kFactor with keep_factor_equal: brings kept_ to Λ (refactoring when it must).
   Status update_kept(const InformationMatrix& lambda, bool refactor);
