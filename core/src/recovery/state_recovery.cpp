@@ -16,6 +16,14 @@ std::string shape(const Eigen::MatrixXd& m) {
   return std::to_string(m.rows()) + "x" + std::to_string(m.cols());
 }
 
+/// `pcg` with the fixed-iteration budget lowered to `cap` (-1: unchanged).
+PcgOptions capped(PcgOptions pcg, RecoveryMode mode, int cap) {
+  if (cap >= 0 && mode == RecoveryMode::kFixedIterations) {
+    pcg.max_iterations = std::min(pcg.max_iterations, cap);
+  }
+  return pcg;
+}
+
 }  // namespace
 
 const char* to_string(RecoveryMode mode) {
@@ -248,10 +256,7 @@ RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Preconditio
   result.mode = options_.mode;
   result.refactored_blocks = preconditioner_.num_blocks();
   fill_rhs(eta);
-  PcgOptions pcg = pcg_options();
-  if (iteration_cap >= 0 && options_.mode == RecoveryMode::kFixedIterations) {
-    pcg.max_iterations = std::min(pcg.max_iterations, iteration_cap);
-  }
+  const PcgOptions pcg = capped(pcg_options(), options_.mode, iteration_cap);
   const PcgSummary summary = solve_pcg(A, M, rhs_, solution_, pcg, workspace_);
   result.status = summary.status;
   result.iterations = summary.iterations;
@@ -270,10 +275,7 @@ RecoveryResult StateRecovery::solve_kept(const SpdOperator& A, const Eigen::Vect
   RecoveryResult result;
   result.mode = options_.mode;
   fill_rhs(eta);
-  PcgOptions pcg = pcg_options();
-  if (options_.mode == RecoveryMode::kFixedIterations) {
-    pcg.max_iterations = std::min(pcg.max_iterations, options_.iterations_after_refresh);
-  }
+  const PcgOptions pcg = capped(pcg_options(), options_.mode, options_.iterations_after_refresh);
   // μ by refinement of the warm start; Σ_{*r} = Λ⁻¹ E_r directly (one backward pass per
   // column), refined as well only when that leaves a residual above the mode's target (on badly
   // conditioned Λ a refinement is more accurate than the direct solve).
