@@ -259,6 +259,7 @@ ReplaySummary full_summary() {
   s.measurements = 123456;
   s.late_dropped = 3;
   s.rejected_updates = {{"dvl", 4}, {"heading", 0}};
+  s.dead_reckoning_rejected_updates = {{"dvl", 9}, {"depth", 1}};
   return s;
 }
 
@@ -279,6 +280,7 @@ TEST(ReplaySummary, JsonRoundTripKeepsEveryField) {
   EXPECT_EQ(r.links.outliers_rejected, 438u);
   EXPECT_EQ(r.late_dropped, 3u);
   EXPECT_EQ(r.rejected_updates, s.rejected_updates);
+  EXPECT_EQ(r.dead_reckoning_rejected_updates, s.dead_reckoning_rejected_updates);
   EXPECT_EQ(r.time_of_use_checks, 109u);
   EXPECT_EQ(r.time_of_use_s, s.time_of_use_s);
   EXPECT_EQ(r.time_of_use_worst_min_eigenvalue, s.time_of_use_worst_min_eigenvalue);
@@ -301,7 +303,8 @@ TEST(ReplaySummary, JsonRoundTripKeepsEveryField) {
     EXPECT_TRUE(j.contains(key)) << key;
   }
   EXPECT_EQ(j["rejected_updates"]["dvl"], 4);
-  EXPECT_EQ(j.size(), 51u);  // every key of today's summary.json
+  EXPECT_EQ(j["dead_reckoning_rejected_updates"]["dvl"], 9);
+  EXPECT_EQ(j.size(), 52u);  // every key of today's summary.json
 }
 
 TEST(ReplaySummary, PartialOrOddSummariesKeepDefaults) {
@@ -317,6 +320,7 @@ TEST(ReplaySummary, PartialOrOddSummariesKeepDefaults) {
   EXPECT_TRUE(j["wall_s"].is_null());
   EXPECT_FALSE(j.contains("dive_dir"));
   EXPECT_FALSE(j.contains("dead_reckoning_final_pose"));
+  EXPECT_FALSE(j.contains("dead_reckoning_rejected_updates"));
   EXPECT_THROW(ReplaySummary::from_json("[1, 2]", "s.json"), std::invalid_argument);
   try {
     ReplaySummary::from_json("{\"wall_s\": ", "out/summary.json");

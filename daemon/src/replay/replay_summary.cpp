@@ -34,6 +34,15 @@ std::optional<core::Vec6> robot_pose(const core::NavFilter& filter) {
   return filter.robot_mean().head<6>();
 }
 
+/// Per sensor name: the updates the filter did not fuse (innovation_stats.h `rejected`).
+std::map<std::string, std::uint64_t> rejected_by_sensor(const core::NavFilter& filter) {
+  std::map<std::string, std::uint64_t> rejected;
+  for (const core::SensorInnovation& r : filter.innovations().sensors()) {
+    rejected[r.name] = r.rejected;
+  }
+  return rejected;
+}
+
 // Readers for from_json: a key that is absent or of another type leaves `out` unchanged.
 void read(const json& j, const char* key, double& out) {
   if (auto it = j.find(key); it != j.end() && it->is_number()) out = it->get<double>();
@@ -61,6 +70,14 @@ void read(const json& j, const char* key, std::optional<core::Vec6>& out) {
   const char* kKeys[6] = {"x_m", "y_m", "z_m", "roll_rad", "pitch_rad", "heading_rad"};
   for (int k = 0; k < 6; ++k) read(*it, kKeys[k], x(k));
   out = x;
+}
+/// An object of counts; entries that are not unsigned integers are skipped.
+void read_counts(const json& j, const char* key, std::map<std::string, std::uint64_t>& out) {
+  const auto it = j.find(key);
+  if (it == j.end() || !it->is_object()) return;
+  for (const auto& [name, n] : it->items()) {
+    if (n.is_number_unsigned()) out[name] = n.get<std::uint64_t>();
+  }
 }
 
 std::string format(const char* fmt, double v) {
@@ -106,6 +123,7 @@ std::string ReplaySummary::to_json() const {
   j["final_pose_running"] = optional_pose_json(final_pose_running);
   if (has_dead_reckoning) {
     j["dead_reckoning_final_pose"] = optional_pose_json(dead_reckoning_final_pose);
+    j["dead_reckoning_rejected_updates"] = dead_reckoning_rejected_updates;
   }
   j["max_cg_relative_residual"] = max_cg_relative_residual;
   j["cg_iterations_per_image"] = cg_iterations_per_image;
@@ -216,11 +234,8 @@ ReplaySummary ReplaySummary::from_json(const std::string& text, const std::strin
   read(j, "measurements", s.measurements);
   read(j, "updates", s.updates);
   read(j, "update_failures", s.update_failures);
-  if (j.contains("rejected_updates") && j["rejected_updates"].is_object()) {
-    for (const auto& [name, n] : j["rejected_updates"].items()) {
-      if (n.is_number_unsigned()) s.rejected_updates[name] = n.get<std::uint64_t>();
-    }
-  }
+  read_counts(j, "rejected_updates", s.rejected_updates);
+  read_counts(j, "dead_reckoning_rejected_updates", s.dead_reckoning_rejected_updates);
   read(j, "recovery_failures", s.recovery_failures);
   read(j, "bound_update_failures", s.bound_update_failures);
   read(j, "before_initialisation", s.before_initialisation);
@@ -268,7 +283,10 @@ ReplaySummary make_replay_summary(const ReplayRun& run, const ReplayAnalysis& an
   s.final_pose = analysis.robot_mean.head<6>();
   s.final_pose_running = robot_pose(*run.slam);
   s.has_dead_reckoning = run.dead_reckoning != nullptr;
-  if (run.dead_reckoning) s.dead_reckoning_final_pose = robot_pose(*run.dead_reckoning);
+  if (run.dead_reckoning) {
+    s.dead_reckoning_final_pose = robot_pose(*run.dead_reckoning);
+    s.dead_reckoning_rejected_updates = rejected_by_sensor(*run.dead_reckoning);
+  }
   s.max_cg_relative_residual = c.max_cg_relative_residual;
   s.cg_iterations_per_image = run.slam->options().recovery.iterations_per_step;
   s.recovery = run.slam->options().recovery_thread
@@ -296,9 +314,7 @@ ReplaySummary make_replay_summary(const ReplayRun& run, const ReplayAnalysis& an
   s.measurements = c.measurements;
   s.updates = c.updates;
   s.update_failures = c.update_failures;
-  for (const SensorInnovation& r : run.slam->innovations().sensors()) {
-    s.rejected_updates[r.name] = r.rejected;
-  }
+  s.rejected_updates = rejected_by_sensor(*run.slam);
   s.recovery_failures = c.recovery_failures;
   s.bound_update_failures = c.bound_update_failures;
   s.before_initialisation = c.before_initialisation;

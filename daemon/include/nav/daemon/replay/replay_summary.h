@@ -63,6 +63,8 @@ struct ReplaySummary {
   std::optional<core::Vec6> final_pose_running;  ///< robot, as published (none: no state yet)
   bool has_dead_reckoning = false;               ///< the twin ran (key present when true)
   std::optional<core::Vec6> dead_reckoning_final_pose;  ///< its robot (none: no state yet)
+  /// The twin's rejected_updates (below); key "dead_reckoning_rejected_updates" with the twin.
+  std::map<std::string, std::uint64_t> dead_reckoning_rejected_updates;
 
   // Recovery.
   double max_cg_relative_residual = kUnset;
