@@ -114,6 +114,42 @@ TEST(KeptEqualFactor, FollowsTheFiltersLambdaThroughPredictionsKeptStatesAndLink
   EXPECT_EQ(factor.spare_blocks(), 40 - images);
 }
 
+TEST(KeptEqualFactor, OrdersTheNewestStatesLastAndStillFollowsLambda) {
+  LinearFilter filter;
+  for (int k = 0; k < 20; ++k) {
+    filter.predict(true);
+    const int newest = filter.lambda().num_blocks() - 1;
+    if (newest > 2) filter.link(filter.random_block(newest), newest);
+  }
+  const int n = filter.lambda().num_blocks(), recent = 6, spare = 8;
+  KeptEqualFactor factor;
+  ASSERT_TRUE(factor.factor(filter.lambda(), spare, recent).ok());
+  // Blocks n-6 .. n-1 hold the six slots before the reserved ones; the robot the last.
+  for (int b = 1; b < n; ++b) {
+    if (b >= n - recent) {
+      EXPECT_GE(factor.slot(b), n - 1 - recent) << "block " << b;
+    } else {
+      EXPECT_LT(factor.slot(b), n - 1 - recent) << "block " << b;
+    }
+  }
+  EXPECT_EQ(factor.slot(0), n - 1 + spare);
+  EXPECT_LT(solve_error(factor, filter.lambda()), 1e-10);
+  for (int image = 0; image < spare; ++image) {
+    filter.predict(false);
+    filter.predict(true);
+    const int newest = filter.lambda().num_blocks() - 1;
+    filter.link(newest - 1 - image % 3, newest);
+    filter.link(filter.random_block(newest), newest);
+    ASSERT_TRUE(factor.update(filter.lambda()).ok()) << "image " << image;
+    EXPECT_LT(solve_error(factor, filter.lambda()), 1e-9) << "image " << image;
+    EXPECT_LT(robot_column_error(factor, filter.lambda()), 1e-9) << "image " << image;
+  }
+  // More recent states than states: all of them are "recent", the plain order.
+  EXPECT_TRUE(factor.factor(filter.lambda(), spare, 10 * n).ok());
+  EXPECT_LT(solve_error(factor, filter.lambda()), 1e-10);
+  EXPECT_EQ(factor.factor(filter.lambda(), spare, -1).code(), StatusCode::kInvalidArgument);
+}
+
 TEST(KeptEqualFactor, ReportsWhatItCannotFollow) {
   LinearFilter filter;
   for (int k = 0; k < 3; ++k) filter.predict(true);

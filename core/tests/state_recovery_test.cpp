@@ -253,6 +253,11 @@ TEST(StateRecovery, RejectsMismatchedSnapshotAndBadOptions) {
   bad.relative_tolerance = 0.0;
   EXPECT_EQ(recovery.set_options(bad).code(), StatusCode::kInvalidArgument);
   EXPECT_THROW(StateRecovery(6, bad), std::invalid_argument);
+  StateRecoveryOptions negative_recent;
+  negative_recent.kept_factor_recent_blocks = -1;
+  const Status s = recovery.set_options(negative_recent);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("kept_factor_recent_blocks"), std::string::npos) << s.message();
   EXPECT_EQ(recovery.initialize(Eigen::VectorXd::Zero(5), Eigen::MatrixXd::Identity(6, 6)).code(),
             StatusCode::kInvalidArgument);
 }

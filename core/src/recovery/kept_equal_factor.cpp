@@ -76,9 +76,10 @@ cholmod_sparse* to_cholmod(std::vector<std::vector<Entry>>& columns, size_t n, c
   return s;
 }
 
-/// AMD order of the block graph of blocks 1 .. n-1 (the robot left out): order[k] = the block
-/// at position k.
-std::vector<int> block_amd(const InformationMatrix& lambda, cholmod_common* c) {
+/// Fill-reducing order of the block graph of blocks 1 .. n-1 (the robot left out): order[k] =
+/// the block at position k. AMD, or with 0 < `recent` < n-1 constrained AMD (CAMD) with the
+/// newest `recent` blocks after all others (file comment).
+std::vector<int> block_amd(const InformationMatrix& lambda, int recent, cholmod_common* c) {
   const int nb = lambda.num_blocks() - 1;
   std::vector<std::vector<int>> lower(static_cast<size_t>(nb));
   size_t nnz = 0;
@@ -104,7 +105,14 @@ std::vector<int> block_amd(const InformationMatrix& lambda, cholmod_common* c) {
     for (int r : lower[static_cast<size_t>(j)]) i[k++] = r;
   }
   p[nb] = k;
-  const int ok = cholmod_amd(B, nullptr, 0, order.data(), c);
+  int ok = 0;
+  if (recent > 0 && recent < nb) {  // else one set: plain AMD (CAMD wants sets < nb)
+    std::vector<int> group(static_cast<size_t>(nb), 0);
+    std::fill(group.end() - recent, group.end(), 1);  // the blocks are in time order
+    ok = cholmod_camd(B, nullptr, 0, group.data(), order.data(), c);
+  } else {
+    ok = cholmod_amd(B, nullptr, 0, order.data(), c);
+  }
   cholmod_free_sparse(&B, c);
   if (!ok) return {};
   for (int& b : order) ++b;
@@ -160,17 +168,19 @@ double KeptEqualFactor::factor_nnz() const {
   return std::accumulate(nz, nz + factor_->L->n, 0.0);
 }
 
-Status KeptEqualFactor::factor(const InformationMatrix& lambda, int spare_blocks) {
+Status KeptEqualFactor::factor(const InformationMatrix& lambda, int spare_blocks,
+                               int recent_blocks) {
   reset();
-  if (lambda.num_blocks() == 0 || spare_blocks < 0) {
+  if (lambda.num_blocks() == 0 || spare_blocks < 0 || recent_blocks < 0) {
     return Status::Error(
         StatusCode::kInvalidArgument,
-        "KeptEqualFactor::factor: needs a non-empty Λ and spare_blocks >= 0 (got " +
+        "KeptEqualFactor::factor: needs a non-empty Λ, spare_blocks >= 0 and recent_blocks >= 0 "
+        "(got " +
             std::to_string(lambda.num_blocks()) + " blocks, " + std::to_string(spare_blocks) +
-            " spare)");
+            " spare, " + std::to_string(recent_blocks) + " recent)");
   }
   cholmod_common* c = &factor_->c;
-  const std::vector<int> order = block_amd(lambda, c);
+  const std::vector<int> order = block_amd(lambda, recent_blocks, c);
   const int n = lambda.num_blocks(), d = lambda.block_dim();
   if (static_cast<int>(order.size()) != n - 1) return cholmod_failure("factor (ordering)", *c);
   slot_.assign(static_cast<size_t>(n), 0);

@@ -78,6 +78,11 @@ Status StateRecoveryOptions::validate() const {
                          "StateRecoveryOptions.kept_factor_spare_blocks must be >= 1, got " +
                              std::to_string(kept_factor_spare_blocks));
   }
+  if (kept_factor_recent_blocks < 0) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "StateRecoveryOptions.kept_factor_recent_blocks must be >= 0, got " +
+                             std::to_string(kept_factor_recent_blocks));
+  }
   if (max_iterations < 1) {
     return Status::Error(StatusCode::kInvalidArgument,
                          "StateRecoveryOptions.max_iterations must be >= 1, got " +
@@ -309,10 +314,11 @@ RecoveryResult StateRecovery::solve_kept(const SpdOperator& A, const Eigen::Vect
 
 Status StateRecovery::update_kept(const InformationMatrix& lambda, bool refactor) {
   const int spare = options_.kept_factor_spare_blocks;
-  if (refactor || !kept_.has_factor()) return kept_.factor(lambda, spare);
+  const int recent = options_.kept_factor_recent_blocks;
+  if (refactor || !kept_.has_factor()) return kept_.factor(lambda, spare, recent);
   const Status s = kept_.update(lambda);
   // Out of reserved slots, or a CHOLMOD failure on a modification: refactor this Λ.
-  return s.ok() ? s : kept_.factor(lambda, spare);
+  return s.ok() ? s : kept_.factor(lambda, spare, recent);
 }
 
 RecoveryResult StateRecovery::solve_factor(const InformationMatrix& lambda,

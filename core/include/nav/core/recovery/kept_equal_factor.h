@@ -11,6 +11,12 @@
 // refactorisation in AMD order of the block graph, then `spare_blocks` reserved slots whose
 // rows are the identity until a state appended later takes them (chronologically, so a new
 // state's rows enter at the end and cause no fill above them), then the robot (block 0) last.
+// With `recent_blocks` > 0 the order is constrained AMD (CAMD) with the newest `recent_blocks`
+// states after all older ones, as iSAM2's incremental ordering puts the most recent variables
+// last (Kaess et al., "iSAM2: Incremental smoothing and mapping using the Bayes tree", IJRR
+// 31(2), 2012): the next images' links mostly reach those states, so their row additions and
+// rank updates run along short paths near the end of the elimination tree instead of through
+// it (docs/performance.md "The newest states ordered last").
 //
 // What changes between two steps of the delayed-state filter (filter/esdf.h), and how each
 // change reaches the factor in update():
@@ -61,10 +67,11 @@ class KeptEqualFactor final : public Preconditioner {
   KeptEqualFactor(const KeptEqualFactor&);
   KeptEqualFactor& operator=(const KeptEqualFactor& other);
 
-  /// Factors Λ afresh (block 0 the robot, blocks 1.. the delayed states) with room for
-  /// `spare_blocks` (>= 0) appended states. kNotPositiveDefinite (no factor kept) when CHOLMOD
-  /// meets a non-positive pivot, kInvalidArgument for an empty Λ or a negative spare count.
-  Status factor(const InformationMatrix& lambda, int spare_blocks);
+  /// Factors Λ afresh (block 0 the robot, blocks 1.. the delayed states in time order) with
+  /// room for `spare_blocks` (>= 0) appended states, the newest `recent_blocks` (>= 0) ordered
+  /// last (file comment). kNotPositiveDefinite (no factor kept) when CHOLMOD meets a
+  /// non-positive pivot, kInvalidArgument for an empty Λ or a negative count.
+  Status factor(const InformationMatrix& lambda, int spare_blocks, int recent_blocks = 0);
   /// Modifies the factor to equal `lambda`: the same filter's Λ some steps later, its blocks
   /// 1 .. factored_blocks()-1 the same states, the blocks after them appended since (file
   /// comment). kOutOfRange when more blocks were appended than reserved slots remain and
@@ -79,6 +86,8 @@ class KeptEqualFactor final : public Preconditioner {
   int factored_blocks() const { return factored_.num_blocks(); }
   /// Reserved slots not taken yet.
   int spare_blocks() const;
+  /// The slot (block position in the factor) of `block`, 0 <= block < factored_blocks().
+  int slot(int block) const { return slot_[static_cast<size_t>(block)]; }
   const KeptFactorUpdate& last_update() const { return last_update_; }
   /// Nonzeros of L (fill), for the benchmarks.
   double factor_nnz() const;

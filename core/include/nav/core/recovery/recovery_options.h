@@ -73,6 +73,9 @@ struct StateRecoveryOptions {
   /// above then only renews the exact marginals. false: blkdiag(P Λ₀ Pᵀ, Λ_TT).
   bool keep_factor_equal = false;
   int kept_factor_spare_blocks = 64;
+  /// The newest delayed states (>= 0) that each refactorisation orders after all older ones
+  /// (kept_equal_factor.h; 0: plain AMD; docs/performance.md "The newest states ordered last").
+  int kept_factor_recent_blocks = 16;
   Status validate() const;
 };
 
