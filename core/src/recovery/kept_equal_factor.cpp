@@ -25,8 +25,12 @@ struct KeptEqualFactor::Cholmod {
     c.nmethods = 1;
     c.method[0].ordering = CHOLMOD_NATURAL;  // slot space is already ordered
     c.postorder = 0;
-    c.supernodal = CHOLMOD_SIMPLICIAL;
-    c.final_ll = 0;  // LDLᵀ: what the Modify module works on
+    // Refactorisations run supernodal (dense BLAS kernels on the fill) and are converted to the
+    // simplicial LDLᵀ the Modify module works on. No relaxed amalgamation: its explicit zeros
+    // would stay in the simplicial factor and cost every later solve and modification.
+    c.supernodal = CHOLMOD_SUPERNODAL;
+    for (int k = 0; k < 3; ++k) c.nrelax[k] = 0;
+    for (double& z : c.zrelax) z = 0.0;
   }
   ~Cholmod() {
     if (L != nullptr) cholmod_free_factor(&L, &c);
@@ -217,7 +221,10 @@ Status KeptEqualFactor::factor(const InformationMatrix& lambda, int spare_blocks
   factor_->L = cholmod_analyze(&view, c);
   if (factor_->L == nullptr) return cholmod_failure("factor (analysis)", *c);
   if (!cholmod_factorize(&view, factor_->L, c) || c->status != CHOLMOD_OK ||
-      factor_->L->minor < factor_->L->n || !(smallest_pivot(*factor_->L) > 0.0)) {
+      factor_->L->minor < factor_->L->n ||
+      !cholmod_change_factor(CHOLMOD_REAL, /*to_ll=*/0, /*to_super=*/0, /*to_packed=*/0,
+                             /*to_monotonic=*/1, factor_->L, c) ||
+      !(smallest_pivot(*factor_->L) > 0.0)) {
     const Status s = cholmod_failure("factor", *c);
     reset();
     return s;
