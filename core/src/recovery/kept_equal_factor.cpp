@@ -29,7 +29,7 @@ struct KeptEqualFactor::Cholmod {
     // simplicial LDLᵀ the Modify module works on. No relaxed amalgamation: its explicit zeros
     // would stay in the simplicial factor and cost every later solve and modification.
     c.supernodal = CHOLMOD_SUPERNODAL;
-    for (int k = 0; k < 3; ++k) c.nrelax[k] = 0;
+    for (size_t& n : c.nrelax) n = 0;
     for (double& z : c.zrelax) z = 0.0;
   }
   ~Cholmod() {
@@ -83,7 +83,7 @@ cholmod_sparse* to_cholmod(std::vector<std::vector<Entry>>& columns, size_t n, c
 /// Fill-reducing order of the block graph of blocks 1 .. n-1 (the robot left out): order[k] =
 /// the block at position k. AMD, or with 0 < `recent` < n-1 constrained AMD (CAMD) with the
 /// newest `recent` blocks after all others (file comment).
-std::vector<int> block_amd(const InformationMatrix& lambda, int recent, cholmod_common* c) {
+std::vector<int> block_order(const InformationMatrix& lambda, int recent, cholmod_common* c) {
   const int nb = lambda.num_blocks() - 1;
   std::vector<std::vector<int>> lower(static_cast<size_t>(nb));
   size_t nnz = 0;
@@ -184,7 +184,7 @@ Status KeptEqualFactor::factor(const InformationMatrix& lambda, int spare_blocks
             " spare, " + std::to_string(recent_blocks) + " recent)");
   }
   cholmod_common* c = &factor_->c;
-  const std::vector<int> order = block_amd(lambda, recent_blocks, c);
+  const std::vector<int> order = block_order(lambda, recent_blocks, c);
   const int n = lambda.num_blocks(), d = lambda.block_dim();
   if (static_cast<int>(order.size()) != n - 1) return cholmod_failure("factor (ordering)", *c);
   slot_.assign(static_cast<size_t>(n), 0);

@@ -72,7 +72,7 @@ void read(const json& j, const char* key, std::optional<core::Vec6>& out) {
   out = x;
 }
 /// An object of counts; entries that are not unsigned integers are skipped.
-void read_counts(const json& j, const char* key, std::map<std::string, std::uint64_t>& out) {
+void read(const json& j, const char* key, std::map<std::string, std::uint64_t>& out) {
   const auto it = j.find(key);
   if (it == j.end() || !it->is_object()) return;
   for (const auto& [name, n] : it->items()) {
@@ -234,8 +234,8 @@ ReplaySummary ReplaySummary::from_json(const std::string& text, const std::strin
   read(j, "measurements", s.measurements);
   read(j, "updates", s.updates);
   read(j, "update_failures", s.update_failures);
-  read_counts(j, "rejected_updates", s.rejected_updates);
-  read_counts(j, "dead_reckoning_rejected_updates", s.dead_reckoning_rejected_updates);
+  read(j, "rejected_updates", s.rejected_updates);
+  read(j, "dead_reckoning_rejected_updates", s.dead_reckoning_rejected_updates);
   read(j, "recovery_failures", s.recovery_failures);
   read(j, "bound_update_failures", s.bound_update_failures);
   read(j, "before_initialisation", s.before_initialisation);
