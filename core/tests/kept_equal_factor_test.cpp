@@ -64,10 +64,11 @@ class LinearFilter {
   RandomSource random_;
 };
 
-/// ‖Λ⁻¹B − M⁻¹B‖ / ‖Λ⁻¹B‖ with a dense solve of Λ.
-double solve_error(const KeptEqualFactor& factor, const InformationMatrix& lambda) {
+/// ‖Λ⁻¹B − M⁻¹B‖ / ‖Λ⁻¹B‖ with a dense solve of Λ, B random with `columns` columns.
+double solve_error(const KeptEqualFactor& factor, const InformationMatrix& lambda,
+                   int columns = 7) {
   const Eigen::MatrixXd dense = lambda.to_dense();
-  const Eigen::MatrixXd B = RandomSource(3).matrix(static_cast<int>(dense.rows()), 7, 1.0);
+  const Eigen::MatrixXd B = RandomSource(3).matrix(static_cast<int>(dense.rows()), columns, 1.0);
   const Eigen::MatrixXd expected = dense.ldlt().solve(B);
   Eigen::MatrixXd Z(B.rows(), B.cols());
   factor.apply(B, Z);
@@ -87,7 +88,10 @@ TEST(KeptEqualFactor, FollowsTheFiltersLambdaThroughPredictionsKeptStatesAndLink
   for (int k = 0; k < 4; ++k) filter.predict(true);
   KeptEqualFactor factor;
   ASSERT_TRUE(factor.factor(filter.lambda(), 40).ok());
-  EXPECT_LT(solve_error(factor, filter.lambda()), 1e-10);
+  // One column, and widths that take 1-4 vectors of 4 and more than one pass of 16.
+  for (const int columns : {1, 2, 4, 7, 13, 16, 21, 40}) {
+    EXPECT_LT(solve_error(factor, filter.lambda(), columns), 1e-10) << columns << " columns";
+  }
   EXPECT_LT(robot_column_error(factor, filter.lambda()), 1e-10);
   int images = 0;
   for (int image = 0; image < 30; ++image, ++images) {

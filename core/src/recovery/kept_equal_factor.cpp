@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "cholmod_view.h"
+#include "ldl_solve.h"
 
 namespace nav::core {
 
@@ -429,60 +430,65 @@ Status KeptEqualFactor::update(const InformationMatrix& lambda) {
   return Status::Ok();
 }
 
+detail::SimplicialLdl KeptEqualFactor::ldl() const {
+  const cholmod_factor& L = *factor_->L;
+  return {static_cast<int>(L.n), static_cast<const int*>(L.p), static_cast<const int*>(L.nz),
+          static_cast<const int*>(L.i), static_cast<const double*>(L.x)};
+}
+
+void KeptEqualFactor::gather_slots(Eigen::Ref<Eigen::MatrixXd> Z, int width) const {
+  const int d = factored_.block_dim();
+  for (int b = 0; b < factored_.num_blocks(); ++b) {
+    for (int i = 0; i < d; ++i) {
+      const double* y = rows_.data() + static_cast<std::ptrdiff_t>(slot_row(b, i)) * width;
+      for (Eigen::Index c = 0; c < Z.cols(); ++c) Z(Eigen::Index{b} * d + i, c) = y[c];
+    }
+  }
+}
+
 void KeptEqualFactor::apply(const Eigen::Ref<const Eigen::MatrixXd>& R,
                             Eigen::Ref<Eigen::MatrixXd> Z) const {
   const int d = factored_.block_dim();
-  scatter_.setZero(static_cast<Eigen::Index>(factor_->L->n), R.cols());
+  const int width = detail::ldl_width(static_cast<int>(R.cols()));
+  rows_.assign(factor_->L->n * static_cast<size_t>(width), 0.0);
   for (int b = 0; b < factored_.num_blocks(); ++b) {
-    scatter_.middleRows(slot_row(b, 0), d) = R.middleRows(static_cast<Eigen::Index>(b) * d, d);
+    for (int i = 0; i < d; ++i) {
+      double* y = rows_.data() + static_cast<std::ptrdiff_t>(slot_row(b, i)) * width;
+      for (Eigen::Index c = 0; c < R.cols(); ++c) y[c] = R(Eigen::Index{b} * d + i, c);
+    }
   }
-  solve_slots(CHOLMOD_A, Z);
+  const detail::SimplicialLdl L = ldl();
+  detail::ldl_forward_diagonal(L, rows_.data(), width);
+  detail::ldl_backward(L, rows_.data(), width);
+  gather_slots(Z, width);
 }
 
 void KeptEqualFactor::solve_robot_columns(Eigen::Ref<Eigen::MatrixXd> Z) const {
   const int d = factored_.block_dim();
   const int first = slot_row(0, 0);
-  const auto* p = static_cast<const int*>(factor_->L->p);
-  const auto* nz = static_cast<const int*>(factor_->L->nz);
-  const auto* row = static_cast<const int*>(factor_->L->i);
-  const auto* x = static_cast<const double*>(factor_->L->x);
+  const detail::SimplicialLdl L = ldl();
   // The robot's diagonal block of L D Lᵀ: unit lower L_rr and D_r (each column of a simplicial
   // LDLᵀ factor starts with its D entry; the robot's columns have no rows below its block).
   Eigen::MatrixXd unit_lower = Eigen::MatrixXd::Identity(d, d);
   Eigen::VectorXd pivots(d);
   for (int j = 0; j < d; ++j) {
-    const int start = p[first + j];
-    pivots[j] = x[start];
-    for (int k = start + 1; k < start + nz[first + j]; ++k) unit_lower(row[k] - first, j) = x[k];
+    const int start = L.p[first + j];
+    pivots[j] = L.value[start];
+    for (int k = start + 1; k < start + L.nz[first + j]; ++k) {
+      unit_lower(L.row[k] - first, j) = L.value[k];
+    }
   }
   // Forward and diagonal passes: D_r⁻¹ L_rr⁻¹ in the robot's rows, zero above them.
   const Eigen::MatrixXd inverse =
+      pivots.cwiseInverse().asDiagonal() *
       unit_lower.triangularView<Eigen::UnitLower>().solve(Eigen::MatrixXd::Identity(d, d));
-  scatter_.setZero(static_cast<Eigen::Index>(factor_->L->n), d);
-  scatter_.middleRows(first, d) = pivots.cwiseInverse().asDiagonal() * inverse;
-  solve_slots(CHOLMOD_Lt, Z);  // the backward pass Lᵀ X = ·
-}
-
-void KeptEqualFactor::solve_slots(int sys, Eigen::Ref<Eigen::MatrixXd> Z) const {
-  const int d = factored_.block_dim();
-  const Eigen::Index n = scatter_.rows(), m = scatter_.cols();
-  cholmod_dense rhs{};
-  rhs.nrow = rhs.d = static_cast<size_t>(n);
-  rhs.ncol = static_cast<size_t>(m);
-  rhs.nzmax = static_cast<size_t>(scatter_.size());
-  rhs.x = scatter_.data();
-  rhs.xtype = CHOLMOD_REAL;
-  rhs.dtype = CHOLMOD_DOUBLE;
-  cholmod_dense* x = cholmod_solve(sys, factor_->L, &rhs, &factor_->c);
-  if (x == nullptr) {
-    Z.setZero();  // PCG then stalls and the residual reports it
-    return;
+  const int width = detail::ldl_width(d);
+  rows_.assign(static_cast<size_t>(L.n) * static_cast<size_t>(width), 0.0);
+  for (int i = 0; i < d; ++i) {
+    for (int c = 0; c < d; ++c) rows_[static_cast<size_t>((first + i) * width + c)] = inverse(i, c);
   }
-  const Eigen::Map<const Eigen::MatrixXd> X(static_cast<const double*>(x->x), n, m);
-  for (int b = 0; b < factored_.num_blocks(); ++b) {
-    Z.middleRows(static_cast<Eigen::Index>(b) * d, d) = X.middleRows(slot_row(b, 0), d);
-  }
-  cholmod_free_dense(&x, &factor_->c);
+  detail::ldl_backward(L, rows_.data(), width);  // Lᵀ X = ·, one pass over the factor
+  gather_slots(Z, width);
 }
 
 }  // namespace nav::core

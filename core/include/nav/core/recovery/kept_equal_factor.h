@@ -48,6 +48,9 @@
 #include "nav/core/status.h"
 
 namespace nav::core {
+namespace detail {
+struct SimplicialLdl;
+}  // namespace detail
 
 /// What the last update() did, all zero after factor() or reset() (diagnostics and tests).
 struct KeptFactorUpdate {
@@ -108,8 +111,10 @@ class KeptEqualFactor final : public Preconditioner {
   void add_block(const InformationMatrix& lambda, int block);
   bool rank_update(const InformationMatrix& lambda, const std::vector<int>& changed);
   void copy_rows(const InformationMatrix& lambda, const std::vector<int>& rows);
-  /// Λ⁻¹ of a right-hand side given in slot space into block space.
-  void solve_slots(int sys, Eigen::Ref<Eigen::MatrixXd> Z) const;
+  /// The factor's arrays for the row-major solves (ldl_solve.h).
+  detail::SimplicialLdl ldl() const;
+  /// Z (block space) from rows_ (slot space, `width` doubles per row).
+  void gather_slots(Eigen::Ref<Eigen::MatrixXd> Z, int width) const;
 
   std::unique_ptr<Cholmod> factor_;
   InformationMatrix factored_{1};  // Λ as the factor holds it
@@ -117,7 +122,7 @@ class KeptEqualFactor final : public Preconditioner {
   std::vector<char> present_;      // present_[block]: its rows are in the factor now
   int next_slot_ = 0, robot_slot_ = 0;
   KeptFactorUpdate last_update_;
-  mutable Eigen::MatrixXd scatter_;
+  mutable std::vector<double> rows_;  // right-hand sides by rows, in slot space
 };
 
 }  // namespace nav::core

@@ -1,0 +1,34 @@
+#pragma once
+// Triangular solves with a simplicial LDLᵀ factor in CHOLMOD's column storage, on right-hand
+// sides stored by rows (row i's `width` values contiguous), so that every entry of L read
+// updates all columns at once with vector operations. Internal to nav_core (kept_equal_factor.cpp).
+//
+// CHOLMOD's simplicial solves (cholmod_solve) take the right-hand sides four columns at a time,
+// so a 12-column backward pass reads the whole factor three times; here it is read once. The
+// arithmetic is the same column-oriented algorithm (Davis, "Direct Methods for Sparse Linear
+// Systems", SIAM 2006, ch. 3): forward by scatter, backward by gather.
+
+namespace nav::core::detail {
+
+/// Column j of the unit lower L holds nz[j] entries from p[j] in `row` / `value`, the first on
+/// the diagonal, where it stores D_j (cholmod_factor with is_ll = 0, is_super = 0).
+struct SimplicialLdl {
+  int n = 0;
+  const int* p = nullptr;
+  const int* nz = nullptr;
+  const int* row = nullptr;
+  const double* value = nullptr;
+};
+
+/// The row width the solves below accept for `columns` right-hand sides: 1, or a multiple of 4
+/// (the added columns are zero and stay zero).
+int ldl_width(int columns);
+
+/// Y ← D⁻¹ L⁻¹ Y in place, Y of L.n rows of `width` (ldl_width) doubles, rows before `first`
+/// zero (they stay zero: the forward pass starts at `first`).
+void ldl_forward_diagonal(const SimplicialLdl& L, double* Y, int width, int first = 0);
+
+/// Y ← L⁻ᵀ Y in place (the backward pass), Y as above.
+void ldl_backward(const SimplicialLdl& L, double* Y, int width);
+
+}  // namespace nav::core::detail
