@@ -1,7 +1,8 @@
 // Factor kept equal to Λ (recovery/kept_equal_factor.h): after every step of a delayed-state
 // filter (predictions that marginalise the robot, kept states, camera links between delayed
 // states, a link to the robot) the modified factor's solve matches a dense solve of the filter's
-// Λ, and so does its direct solve of the robot's covariance column; running out of reserved slots,
+// Λ, and so do its direct solve of the robot's covariance column and that solve together with a
+// refinement step; running out of reserved slots,
 // a lost block and a copy are reported, not mis-solved; and a recovery in the kept-equal mode
 // converges in one iteration per step on a replayed pose graph.
 #include "nav/core/recovery/kept_equal_factor.h"
@@ -83,6 +84,18 @@ double robot_column_error(const KeptEqualFactor& factor, const InformationMatrix
   return (Z - expected).norm() / expected.norm();
 }
 
+/// The same for solve_with_robot_columns: [Λ⁻¹ r | Σ_{*r}] against a dense inverse.
+double step_with_robot_column_error(const KeptEqualFactor& factor,
+                                    const InformationMatrix& lambda) {
+  const Eigen::MatrixXd inverse = lambda.to_dense().inverse();
+  const Eigen::VectorXd r = RandomSource(5).matrix(static_cast<int>(inverse.rows()), 1, 1.0);
+  Eigen::MatrixXd expected(inverse.rows(), 1 + kD);
+  expected << inverse * r, inverse.leftCols(kD);
+  Eigen::MatrixXd Z = Eigen::MatrixXd::Constant(expected.rows(), 1 + kD, 1e3);
+  factor.solve_with_robot_columns(r, Z);
+  return (Z - expected).norm() / expected.norm();
+}
+
 TEST(KeptEqualFactor, FollowsTheFiltersLambdaThroughPredictionsKeptStatesAndLinks) {
   LinearFilter filter;
   for (int k = 0; k < 4; ++k) filter.predict(true);
@@ -106,6 +119,7 @@ TEST(KeptEqualFactor, FollowsTheFiltersLambdaThroughPredictionsKeptStatesAndLink
     EXPECT_EQ(factor.factored_blocks(), filter.lambda().num_blocks());
     EXPECT_LT(solve_error(factor, filter.lambda()), 1e-9) << "image " << image;
     EXPECT_LT(robot_column_error(factor, filter.lambda()), 1e-9) << "image " << image;
+    EXPECT_LT(step_with_robot_column_error(factor, filter.lambda()), 1e-9) << "image " << image;
     // The robot and its neighbours were replaced, one state was appended, and nothing needed a
     // downdate (the older endpoints only gained link information).
     EXPECT_GE(factor.last_update().rows_replaced, 2);

@@ -25,8 +25,8 @@ constexpr int kMaxChunks = 4;  // 16 columns per pass: 4 accumulators, loads of 
 /// Forward and diagonal passes over C chunks of 4 columns starting at Y (row stride `stride`).
 template <int C>
 [[gnu::always_inline]] inline void forward_chunks(const SimplicialLdl& L, double* Y,
-                                                  std::ptrdiff_t stride, int first) {
-  for (int j = first; j < L.n; ++j) {
+                                                  std::ptrdiff_t stride) {
+  for (int j = 0; j < L.n; ++j) {
     double* yj = Y + j * stride;
     v4d y[C];
     for (int c = 0; c < C; ++c) y[c] = NAV_LOAD(yj + c * kLanes);
@@ -60,8 +60,8 @@ template <int C>
   }
 }
 
-NAV_LDL_KERNEL void forward_one(const SimplicialLdl& L, double* y, int first) {
-  for (int j = first; j < L.n; ++j) {
+NAV_LDL_KERNEL void forward_one(const SimplicialLdl& L, double* y) {
+  for (int j = 0; j < L.n; ++j) {
     const double yj = y[j];
     const int end = L.p[j] + L.nz[j];
     for (int k = L.p[j] + 1; k < end; ++k) y[L.row[k]] -= L.value[k] * yj;
@@ -79,19 +79,19 @@ NAV_LDL_KERNEL void backward_one(const SimplicialLdl& L, double* y) {
 }
 
 NAV_LDL_KERNEL void forward_vectors(const SimplicialLdl& L, double* Y, std::ptrdiff_t stride,
-                                    int chunks, int first) {
+                                    int chunks) {
   switch (chunks) {
     case 1:
-      forward_chunks<1>(L, Y, stride, first);
+      forward_chunks<1>(L, Y, stride);
       break;
     case 2:
-      forward_chunks<2>(L, Y, stride, first);
+      forward_chunks<2>(L, Y, stride);
       break;
     case 3:
-      forward_chunks<3>(L, Y, stride, first);
+      forward_chunks<3>(L, Y, stride);
       break;
     default:
-      forward_chunks<4>(L, Y, stride, first);
+      forward_chunks<4>(L, Y, stride);
       break;
   }
 }
@@ -118,15 +118,17 @@ NAV_LDL_KERNEL void backward_vectors(const SimplicialLdl& L, double* Y, std::ptr
 
 int ldl_width(int columns) { return columns <= 1 ? 1 : (columns + kLanes - 1) / kLanes * kLanes; }
 
-void ldl_forward_diagonal(const SimplicialLdl& L, double* Y, int width, int first) {
+void ldl_forward_diagonal(const SimplicialLdl& L, double* Y, int width, int columns) {
   if (width == 1) {
-    forward_one(L, Y, first);
+    forward_one(L, Y);
     return;
   }
-  // Wider than 16 columns: passes over groups of up to 16 (4 accumulators per row).
-  for (int offset = 0; offset < width; offset += kMaxChunks * kLanes) {
-    const int chunks = (width - offset) / kLanes;
-    forward_vectors(L, Y + offset, width, chunks < kMaxChunks ? chunks : kMaxChunks, first);
+  // More than 16 columns: passes over groups of up to 16 (4 accumulators per row).
+  const int lanes = (columns + kLanes - 1) / kLanes * kLanes;
+  const int used = lanes < width ? lanes : width;
+  for (int offset = 0; offset < used; offset += kMaxChunks * kLanes) {
+    const int chunks = (used - offset) / kLanes;
+    forward_vectors(L, Y + offset, width, chunks < kMaxChunks ? chunks : kMaxChunks);
   }
 }
 

@@ -24,9 +24,9 @@ struct SimplicialLdl {
 /// (the added columns are zero and stay zero).
 int ldl_width(int columns);
 
-/// Y ← D⁻¹ L⁻¹ Y in place, Y of L.n rows of `width` (ldl_width) doubles, rows before `first`
-/// zero (they stay zero: the forward pass starts at `first`).
-void ldl_forward_diagonal(const SimplicialLdl& L, double* Y, int width, int first = 0);
+/// Y ← D⁻¹ L⁻¹ Y in place in the first `columns` columns (rounded up to a multiple of 4 when
+/// width > 1; the others are left as they are), Y of L.n rows of `width` (ldl_width) doubles.
+void ldl_forward_diagonal(const SimplicialLdl& L, double* Y, int width, int columns);
 
 /// Y ← L⁻ᵀ Y in place (the backward pass), Y as above.
 void ldl_backward(const SimplicialLdl& L, double* Y, int width);

@@ -276,51 +276,6 @@ RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Preconditio
   return result;
 }
 
-RecoveryResult StateRecovery::solve_kept(const SpdOperator& A, const Eigen::VectorXd& eta) {
-  RecoveryResult result;
-  result.mode = options_.mode;
-  fill_rhs(eta);
-  const PcgOptions pcg = capped(pcg_options(), options_.mode, options_.iterations_after_refresh);
-  // μ by refinement of the warm start; Σ_{*r} = Λ⁻¹ E_r directly (one backward pass per
-  // column), refined as well only when that leaves a residual above the mode's target (on badly
-  // conditioned Λ a refinement is more accurate than the direct solve).
-  const int d = block_dim_;
-  const double target = options_.mode == RecoveryMode::kTolerance ? options_.relative_tolerance
-                                                                  : options_.refresh_residual;
-  const PcgSummary mean =
-      solve_refinement(A, kept_, rhs_.leftCols(1), solution_.leftCols(1), pcg, workspace_);
-  result.status = mean.status;
-  result.iterations = mean.iterations;
-  if (!result.status.ok()) return result;
-  if (pcg.max_iterations > 0) kept_.solve_robot_columns(solution_.rightCols(d));
-  column_residual_.resize(solution_.rows(), d);
-  A.multiply(solution_.rightCols(d), column_residual_);
-  column_residual_ = rhs_.rightCols(d) - column_residual_;
-  Eigen::VectorXd column_norm = column_residual_.colwise().norm().transpose();
-  if (pcg.max_iterations > 0 && !(column_norm.maxCoeff() <= target)) {
-    const PcgSummary column =
-        solve_refinement(A, kept_, rhs_.rightCols(d), solution_.rightCols(d), pcg, workspace_);
-    result.status = column.status;
-    if (!result.status.ok()) return result;
-    column_residual_ = workspace_.R.topLeftCorner(solution_.rows(), d);
-    column_norm = column.residual_norm;
-  }
-  Eigen::VectorXd residual_norm(1 + d);
-  residual_norm << mean.residual_norm[0], column_norm;
-  finish(result, residual_norm, rhs_.colwise().norm().transpose());
-  set_spectral(result, column_residual_.transpose() * column_residual_);
-  return result;
-}
-
-Status StateRecovery::update_kept(const InformationMatrix& lambda, bool refactor) {
-  const int spare = options_.kept_factor_spare_blocks;
-  const int recent = options_.kept_factor_recent_blocks;
-  if (refactor || !kept_.has_factor()) return kept_.factor(lambda, spare, recent);
-  const Status s = kept_.update(lambda);
-  // Out of reserved slots, or a CHOLMOD failure on a modification: refactor this Λ.
-  return s.ok() ? s : kept_.factor(lambda, spare, recent);
-}
-
 RecoveryResult StateRecovery::solve_factor(const InformationMatrix& lambda,
                                            const Eigen::VectorXd& eta) {
   RecoveryResult result;

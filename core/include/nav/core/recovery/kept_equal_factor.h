@@ -103,6 +103,11 @@ class KeptEqualFactor final : public Preconditioner {
   /// slot, so L⁻¹ E_r is zero above its rows: the forward pass is a dense block_dim² solve and
   /// only the backward pass reads the whole factor (half of apply(E_r)'s work).
   void solve_robot_columns(Eigen::Ref<Eigen::MatrixXd> Z) const;
+  /// Z = [Λ⁻¹ r | Λ⁻¹ E_r] (dim() x (1 + block_dim)): a refinement step of the mean and the
+  /// robot's column together, with one forward pass (of r alone) and one backward pass over the
+  /// factor for all 1 + block_dim columns.
+  void solve_with_robot_columns(const Eigen::Ref<const Eigen::VectorXd>& r,
+                                Eigen::Ref<Eigen::MatrixXd> Z) const;
 
  private:
   struct Cholmod;
@@ -113,6 +118,8 @@ class KeptEqualFactor final : public Preconditioner {
   void copy_rows(const InformationMatrix& lambda, const std::vector<int>& rows);
   /// The factor's arrays for the row-major solves (ldl_solve.h).
   detail::SimplicialLdl ldl() const;
+  /// The robot's columns D_r⁻¹ L_rr⁻¹ into rows_ at column `offset`, then the backward pass.
+  void robot_columns_backward(int width, int offset) const;
   /// Z (block space) from rows_ (slot space, `width` doubles per row).
   void gather_slots(Eigen::Ref<Eigen::MatrixXd> Z, int width) const;
 
@@ -122,7 +129,8 @@ class KeptEqualFactor final : public Preconditioner {
   std::vector<char> present_;      // present_[block]: its rows are in the factor now
   int next_slot_ = 0, robot_slot_ = 0;
   KeptFactorUpdate last_update_;
-  mutable std::vector<double> rows_;  // right-hand sides by rows, in slot space
+  mutable std::vector<double> rows_;     // right-hand sides by rows, in slot space
+  mutable std::vector<double> forward_;  // one right-hand side, in slot space
 };
 
 }  // namespace nav::core

@@ -96,10 +96,15 @@ class StateRecovery {
   RecoveryResult solve_with(const SpdOperator& A, const Preconditioner& M,
                             const Eigen::VectorXd& eta, int iteration_cap = -1);
   /// With the kept factor (M = Λ): μ by iterative refinement (pcg.h solve_refinement), capped
-  /// at iterations_after_refresh; Σ_{*r} solved directly (KeptEqualFactor::solve_robot_columns)
-  /// and refined too when its relative residual exceeds relative_tolerance (kTolerance) or
-  /// refresh_residual (kFixedIterations). The residuals are the true ones.
+  /// at iterations_after_refresh; Σ_{*r} solved directly and refined too when its relative
+  /// residual exceeds relative_tolerance (kTolerance) or refresh_residual (kFixedIterations).
+  /// The residuals are the true ones.
   RecoveryResult solve_kept(const SpdOperator& A, const Eigen::VectorXd& eta);
+  /// solve_kept's first step of μ and the direct Σ_{*r} with one backward pass over the factor
+  /// and one product with Λ for both residuals (KeptEqualFactor::solve_with_robot_columns);
+  /// later steps of μ by solve_refinement while each halves its residual. Sets
+  /// column_residual_. pcg.max_iterations >= 1.
+  PcgSummary kept_step(const SpdOperator& A, const PcgOptions& pcg);
   RecoveryResult solve_factor(const InformationMatrix& lambda, const Eigen::VectorXd& eta);
   /// kFactor with keep_factor_equal: brings kept_ to Λ (refactoring when it must).
   Status update_kept(const InformationMatrix& lambda, bool refactor);

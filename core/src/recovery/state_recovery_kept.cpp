@@ -1,0 +1,106 @@
+// The recovery with the kept factor (M = Λ): the mean by refinement and the robot's column
+// solved directly (recovery/state_recovery.h "solve_kept").
+#include <algorithm>
+
+#include "nav/core/recovery/state_recovery.h"
+
+namespace nav::core {
+
+Status StateRecovery::update_kept(const InformationMatrix& lambda, bool refactor) {
+  const int spare = options_.kept_factor_spare_blocks;
+  const int recent = options_.kept_factor_recent_blocks;
+  if (refactor || !kept_.has_factor()) return kept_.factor(lambda, spare, recent);
+  const Status s = kept_.update(lambda);
+  // Out of reserved slots, or a CHOLMOD failure on a modification: refactor this Λ.
+  return s.ok() ? s : kept_.factor(lambda, spare, recent);
+}
+
+PcgSummary StateRecovery::kept_step(const SpdOperator& A, const PcgOptions& pcg) {
+  const Eigen::Index n = solution_.rows();
+  const int d = block_dim_;
+  PcgSummary summary;
+  auto mean = solution_.col(0);
+  const auto eta = rhs_.col(0);
+  Eigen::MatrixXd& product = workspace_.Q;
+  product.resize(n, 1 + d);
+  // r₀ = η − Λ μ₀, from μ₀ = 0 when the warm start is further from μ than zero (pcg.h).
+  A.multiply(mean, product.leftCols(1));
+  Eigen::VectorXd r0 = eta - product.col(0);
+  if (pcg.restart_worse_than_zero && mean.dot(product.col(0)) - 2.0 * eta.dot(mean) > 0.0) {
+    mean.setZero();
+    r0 = eta;
+    summary.restarted_columns = 1;
+  }
+  Eigen::MatrixXd& step = workspace_.Z;
+  step.resize(n, 1 + d);
+  kept_.solve_with_robot_columns(r0, step);  // [Λ⁻¹ r₀ | Λ⁻¹ E_r]
+  mean += step.col(0);
+  solution_.rightCols(d) = step.rightCols(d);
+  A.multiply(solution_, product);  // both residuals by one product
+  Eigen::MatrixXd& residual = workspace_.R;
+  residual = rhs_ - product;
+  // The step raised the mean's A-norm error (zᵀAz > 2 zᵀr₀, Az = r₀ − r₁): keep μ₀ (pcg.h).
+  const auto z = step.col(0);
+  if (z.dot(r0 - residual.col(0)) > 2.0 * z.dot(r0)) {
+    mean -= z;
+    residual.col(0) = r0;
+  }
+  column_residual_ = residual.rightCols(d);
+  summary.iterations = 1;
+  summary.residual_norm = Eigen::VectorXd::Constant(1, residual.col(0).norm());
+  // Further steps of the mean only while each one at least halves its residual (pcg.h).
+  const bool done = !(summary.residual_norm[0] < 0.5 * r0.norm()) ||
+                    (pcg.relative_tolerance > 0.0 &&
+                     summary.residual_norm[0] <= pcg.relative_tolerance * eta.norm());
+  if (pcg.max_iterations <= 1 || done) return summary;
+  PcgOptions rest = pcg;
+  rest.max_iterations -= 1;
+  PcgSummary more =
+      solve_refinement(A, kept_, rhs_.leftCols(1), solution_.leftCols(1), rest, workspace_);
+  more.iterations += 1;
+  more.restarted_columns += summary.restarted_columns;
+  return more;
+}
+
+RecoveryResult StateRecovery::solve_kept(const SpdOperator& A, const Eigen::VectorXd& eta) {
+  RecoveryResult result;
+  result.mode = options_.mode;
+  fill_rhs(eta);
+  PcgOptions pcg = pcg_options();
+  if (options_.mode == RecoveryMode::kFixedIterations) {
+    pcg.max_iterations = std::min(pcg.max_iterations, options_.iterations_after_refresh);
+  }
+  const int d = block_dim_;
+  const double target = options_.mode == RecoveryMode::kTolerance ? options_.relative_tolerance
+                                                                  : options_.refresh_residual;
+  // No iterations: only the residuals of the warm start (the recovery thread's certificate).
+  const PcgSummary mean =
+      pcg.max_iterations > 0
+          ? kept_step(A, pcg)
+          : solve_refinement(A, kept_, rhs_.leftCols(1), solution_.leftCols(1), pcg, workspace_);
+  result.status = mean.status;
+  result.iterations = mean.iterations;
+  if (!result.status.ok()) return result;
+  if (pcg.max_iterations == 0) {
+    column_residual_.resize(solution_.rows(), d);
+    A.multiply(solution_.rightCols(d), column_residual_);
+    column_residual_ = rhs_.rightCols(d) - column_residual_;
+  }
+  Eigen::VectorXd column_norm = column_residual_.colwise().norm().transpose();
+  // On badly conditioned Λ a refinement of the direct solve is more accurate than it.
+  if (pcg.max_iterations > 0 && !(column_norm.maxCoeff() <= target)) {
+    const PcgSummary column =
+        solve_refinement(A, kept_, rhs_.rightCols(d), solution_.rightCols(d), pcg, workspace_);
+    result.status = column.status;
+    if (!result.status.ok()) return result;
+    column_residual_ = workspace_.R.topLeftCorner(solution_.rows(), d);
+    column_norm = column.residual_norm;
+  }
+  Eigen::VectorXd residual_norm(1 + d);
+  residual_norm << mean.residual_norm[0], column_norm;
+  finish(result, residual_norm, rhs_.colwise().norm().transpose());
+  set_spectral(result, column_residual_.transpose() * column_residual_);
+  return result;
+}
+
+}  // namespace nav::core
