@@ -142,6 +142,17 @@ TEST(Config, RecoveryPreconditionerNames) {
   EXPECT_NE(e.reason().find("block_jacobi, factor or kept_factor"), std::string::npos) << e.what();
 }
 
+TEST(Config, KeptFactorRecentStates) {
+  EXPECT_EQ(parse_config(kMinimal).filter.recovery_kept_recent_states,
+            core::StateRecoveryOptions{}.kept_factor_recent_blocks);
+  const NavdConfig c =
+      parse_config(std::string(kMinimal) + "filter: {recovery_kept_recent_states: 64}\n");
+  EXPECT_EQ(c.filter.recovery_kept_recent_states, 64);
+  const ConfigError e =
+      expect_error(std::string(kMinimal) + "filter: {recovery_kept_recent_states: -1}\n");
+  EXPECT_EQ(e.key_path(), "filter.recovery_kept_recent_states");
+}
+
 TEST(Config, RegistrationSigningKeys) {
   NavdConfig c = parse_config(kMinimal);
   EXPECT_TRUE(c.lcm.registration_signing.key_file.empty());  // off by default

@@ -59,13 +59,27 @@ core::AttitudeRestoringOptions parse_attitude_restoring(const YamlReader& a) {
 }
 
 FilterConfig parse_filter(const YamlReader& f) {
-  f.expect_map({"process_noise_psd", "attitude_restoring", "cg_iterations_per_step",
-                "latency_window_ms", "gating_chi2_threshold", "recovery_thread",
-                "recovery_handoff_s", "recovery_preconditioner", "recovery_refresh_interval",
-                "recovery_refresh_residual", "registration_wait_s", "max_pending_registrations",
-                "proposal_min_probability", "proposal_min_overlap", "proposal_max_per_image",
-                "dvl_gate_sigma", "roll_pitch_gate_sigma", "heading_gate_sigma",
-                "depth_gate_sigma", "aid_gate_reset_s"});
+  f.expect_map({"process_noise_psd",
+                "attitude_restoring",
+                "cg_iterations_per_step",
+                "latency_window_ms",
+                "gating_chi2_threshold",
+                "recovery_thread",
+                "recovery_handoff_s",
+                "recovery_preconditioner",
+                "recovery_refresh_interval",
+                "recovery_refresh_residual",
+                "recovery_kept_recent_states",
+                "registration_wait_s",
+                "max_pending_registrations",
+                "proposal_min_probability",
+                "proposal_min_overlap",
+                "proposal_max_per_image",
+                "dvl_gate_sigma",
+                "roll_pitch_gate_sigma",
+                "heading_gate_sigma",
+                "depth_gate_sigma",
+                "aid_gate_reset_s"});
   FilterConfig filter;
   if (f.has("process_noise_psd")) {
     const YamlReader p = f.at("process_noise_psd");
@@ -98,6 +112,7 @@ FilterConfig parse_filter(const YamlReader& f) {
   }
   f.read("recovery_refresh_interval", filter.recovery_refresh_interval, 1, 100000);
   f.read("recovery_refresh_residual", filter.recovery_refresh_residual, 1e-12, 1e12);
+  f.read("recovery_kept_recent_states", filter.recovery_kept_recent_states, 0, 100000);
   f.read("registration_wait_s", filter.registration_wait_s, 0.0, 3600.0);
   f.read("max_pending_registrations", filter.max_pending_registrations, 1, 100000);
   f.read("proposal_min_probability", filter.proposal_min_probability, 1e-9, 1.0 - 1e-9);

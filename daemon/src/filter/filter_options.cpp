@@ -40,6 +40,7 @@ core::NavFilterOptions filter_options_from_config(const NavdConfig& config) {
   o.recovery.keep_factor_equal = config.filter.recovery_keep_factor_equal;
   o.recovery.refresh_interval = config.filter.recovery_refresh_interval;
   o.recovery.refresh_residual = config.filter.recovery_refresh_residual;
+  o.recovery.kept_factor_recent_blocks = config.filter.recovery_kept_recent_states;
   o.camera_gate_chi2 =
       core::equivalent_chi_square_gate(config.filter.gating_chi2_threshold, 6, 5);
   o.aid_gate = config.filter.aid_gate;

@@ -27,6 +27,9 @@ struct FilterConfig {
   /// image and the refresh only renews the exact marginals (core/recovery/kept_equal_factor.h).
   bool recovery_keep_factor_equal = false;
   int recovery_refresh_interval = 1;  ///< [1, 100000]
+  /// kept_factor: the newest states ordered last at each refactorisation, [0, 100000]
+  /// (core/recovery/kept_equal_factor.h; 0: plain AMD).
+  int recovery_kept_recent_states = core::StateRecoveryOptions{}.kept_factor_recent_blocks;
   /// factor: refactor also after a solve that left a relative residual above this, [1e-12, 1e12]
   double recovery_refresh_residual = 1e-6;
   /// Data time from an image to the measurement at which the filter takes the recovery
