@@ -18,18 +18,23 @@ void KeptEqualFactor::gather_slots(Eigen::Ref<Eigen::MatrixXd> Z, int width) con
   }
 }
 
-void KeptEqualFactor::apply(const Eigen::Ref<const Eigen::MatrixXd>& R,
-                            Eigen::Ref<Eigen::MatrixXd> Z) const {
+void KeptEqualFactor::scatter_slots(const Eigen::Ref<const Eigen::MatrixXd>& R, double* rows,
+                                    int width) const {
   const int d = factored_.block_dim();
-  const int width = detail::ldl_width(static_cast<int>(R.cols()));
-  rows_.assign(static_cast<size_t>(ldl().n) * static_cast<size_t>(width), 0.0);
   for (int b = 0; b < factored_.num_blocks(); ++b) {
     for (int i = 0; i < d; ++i) {
-      double* y = rows_.data() + static_cast<std::ptrdiff_t>(slot_row(b, i)) * width;
+      double* y = rows + static_cast<std::ptrdiff_t>(slot_row(b, i)) * width;
       for (Eigen::Index c = 0; c < R.cols(); ++c) y[c] = R(Eigen::Index{b} * d + i, c);
     }
   }
+}
+
+void KeptEqualFactor::apply(const Eigen::Ref<const Eigen::MatrixXd>& R,
+                            Eigen::Ref<Eigen::MatrixXd> Z) const {
+  const int width = detail::ldl_width(static_cast<int>(R.cols()));
   const detail::SimplicialLdl L = ldl();
+  rows_.assign(static_cast<size_t>(L.n) * static_cast<size_t>(width), 0.0);
+  scatter_slots(R, rows_.data(), width);
   detail::ldl_forward_diagonal(L, rows_.data(), width, static_cast<int>(R.cols()));
   detail::ldl_backward(L, rows_.data(), width);
   gather_slots(Z, width);
@@ -48,10 +53,7 @@ void KeptEqualFactor::solve_with_robot_columns(const Eigen::Ref<const Eigen::Vec
   const detail::SimplicialLdl L = ldl();
   // The forward pass of r alone, on a compact vector (its scattered updates then stay in cache).
   forward_.assign(static_cast<size_t>(L.n), 0.0);
-  for (int b = 0; b < factored_.num_blocks(); ++b) {
-    for (int i = 0; i < d; ++i)
-      forward_[static_cast<size_t>(slot_row(b, i))] = r[Eigen::Index{b} * d + i];
-  }
+  scatter_slots(r, forward_.data(), 1);
   detail::ldl_forward_diagonal(L, forward_.data(), 1, 1);
   const int width = detail::ldl_width(1 + d);
   rows_.assign(static_cast<size_t>(L.n) * static_cast<size_t>(width), 0.0);

@@ -120,6 +120,8 @@ class KeptEqualFactor final : public Preconditioner {
   detail::SimplicialLdl ldl() const;
   /// The robot's columns D_r⁻¹ L_rr⁻¹ into rows_ at column `offset`, then the backward pass.
   void robot_columns_backward(int width, int offset) const;
+  /// R (block space) into `rows` (slot space, `width` doubles per row; the others untouched).
+  void scatter_slots(const Eigen::Ref<const Eigen::MatrixXd>& R, double* rows, int width) const;
   /// Z (block space) from rows_ (slot space, `width` doubles per row).
   void gather_slots(Eigen::Ref<Eigen::MatrixXd> Z, int width) const;
 
