@@ -36,27 +36,6 @@ Status check_sizes(const char* where, const SpdOperator& A, const Preconditioner
                            std::to_string(X.rows()) + "x" + std::to_string(X.cols()) + ")");
 }
 
-/// Restarts from zero (X = 0, R = B) every column whose warm start is further from the solution
-/// than zero in the A-norm (PcgOptions::restart_worse_than_zero); AX = A X. Returns the count.
-int restart_worse_than_zero(const Eigen::Ref<const Eigen::MatrixXd>& B,
-                            const Eigen::Ref<const Eigen::MatrixXd>& AX,
-                            Eigen::Ref<Eigen::MatrixXd> X, Eigen::Ref<Eigen::MatrixXd> R) {
-  int restarted = 0;
-  for (Eigen::Index c = 0; c < B.cols(); ++c) {
-    if (X.col(c).dot(AX.col(c)) - 2.0 * B.col(c).dot(X.col(c)) > 0.0) {
-      X.col(c).setZero();
-      R.col(c) = B.col(c);
-      ++restarted;
-    }
-  }
-  return restarted;
-}
-
-/// A column is done when its residual norm meets the relative tolerance (never when it is 0).
-bool meets_tolerance(const PcgOptions& options, double residual_norm, double rhs_norm) {
-  return options.relative_tolerance > 0.0 && residual_norm <= options.relative_tolerance * rhs_norm;
-}
-
 /// The summary's residuals from the residual R at exit.
 void finish_summary(const Eigen::Ref<const Eigen::MatrixXd>& R, const Eigen::VectorXd& rhs_norm,
                     const PcgOptions& options, PcgSummary& summary) {
@@ -178,6 +157,30 @@ Status PcgOptions::validate() const {
                              std::to_string(relative_tolerance));
   }
   return Status::Ok();
+}
+
+int restart_worse_than_zero(const Eigen::Ref<const Eigen::MatrixXd>& B,
+                            const Eigen::Ref<const Eigen::MatrixXd>& AX,
+                            Eigen::Ref<Eigen::MatrixXd> X, Eigen::Ref<Eigen::MatrixXd> R) {
+  int restarted = 0;
+  for (Eigen::Index c = 0; c < B.cols(); ++c) {
+    if (X.col(c).dot(AX.col(c)) - 2.0 * B.col(c).dot(X.col(c)) > 0.0) {
+      X.col(c).setZero();
+      R.col(c) = B.col(c);
+      ++restarted;
+    }
+  }
+  return restarted;
+}
+
+bool meets_tolerance(const PcgOptions& options, double residual_norm, double rhs_norm) {
+  return options.relative_tolerance > 0.0 && residual_norm <= options.relative_tolerance * rhs_norm;
+}
+
+bool refinement_step_raised_error(const Eigen::Ref<const Eigen::VectorXd>& z,
+                                  const Eigen::Ref<const Eigen::VectorXd>& r_before,
+                                  const Eigen::Ref<const Eigen::VectorXd>& r_after) {
+  return z.dot(r_before - r_after) > 2.0 * z.dot(r_before);
 }
 
 PcgSummary solve_pcg(const SpdOperator& A, const Preconditioner& M,
@@ -304,10 +307,7 @@ PcgSummary solve_refinement(const SpdOperator& A, const Preconditioner& M,
     R = B - R;
     for (Eigen::Index c = 0; c < m; ++c) {
       if (!active[static_cast<size_t>(c)]) continue;
-      // A z = R_before - R: the step's change of the A-norm error is zᵀAz - 2 zᵀr_before.
-      const double z_r = Z.col(c).dot(R_before.col(c));
-      const double z_a_z = Z.col(c).dot(R_before.col(c) - R.col(c));
-      const bool worse = z_a_z > 2.0 * z_r;
+      const bool worse = refinement_step_raised_error(Z.col(c), R_before.col(c), R.col(c));
       if (worse) {
         X.col(c) = X_before.col(c);
         R.col(c) = R_before.col(c);

@@ -16,14 +16,6 @@ std::string shape(const Eigen::MatrixXd& m) {
   return std::to_string(m.rows()) + "x" + std::to_string(m.cols());
 }
 
-/// `pcg` with the fixed-iteration budget lowered to `cap` (-1: unchanged).
-PcgOptions capped(PcgOptions pcg, RecoveryMode mode, int cap) {
-  if (cap >= 0 && mode == RecoveryMode::kFixedIterations) {
-    pcg.max_iterations = std::min(pcg.max_iterations, cap);
-  }
-  return pcg;
-}
-
 }  // namespace
 
 const char* to_string(RecoveryMode mode) {
@@ -236,10 +228,11 @@ void StateRecovery::set_spectral(RecoveryResult& result, const Eigen::MatrixXd& 
       result.column_residual_frobenius, std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff())));
 }
 
-PcgOptions StateRecovery::pcg_options() const {
+PcgOptions StateRecovery::pcg_options(int iteration_cap) const {
   PcgOptions pcg;
   if (options_.mode == RecoveryMode::kFixedIterations) {
-    pcg.max_iterations = options_.iterations_per_step;
+    pcg.max_iterations = iteration_cap >= 0 ? std::min(options_.iterations_per_step, iteration_cap)
+                                            : options_.iterations_per_step;
     pcg.relative_tolerance = 0.0;
   } else {
     pcg.max_iterations = options_.max_iterations;
@@ -261,7 +254,7 @@ RecoveryResult StateRecovery::solve_with(const SpdOperator& A, const Preconditio
   result.mode = options_.mode;
   result.refactored_blocks = preconditioner_.num_blocks();
   fill_rhs(eta);
-  const PcgOptions pcg = capped(pcg_options(), options_.mode, iteration_cap);
+  const PcgOptions pcg = pcg_options(iteration_cap);
   const PcgSummary summary = solve_pcg(A, M, rhs_, solution_, pcg, workspace_);
   result.status = summary.status;
   result.iterations = summary.iterations;

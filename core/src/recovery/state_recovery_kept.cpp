@@ -1,7 +1,5 @@
 // The recovery with the kept factor (M = Λ): the mean by refinement and the robot's column
 // solved directly (recovery/state_recovery.h "solve_kept").
-#include <algorithm>
-
 #include "nav/core/recovery/state_recovery.h"
 
 namespace nav::core {
@@ -26,10 +24,9 @@ PcgSummary StateRecovery::kept_step(const SpdOperator& A, const PcgOptions& pcg)
   // r₀ = η − Λ μ₀, from μ₀ = 0 when the warm start is further from μ than zero (pcg.h).
   A.multiply(mean, product.leftCols(1));
   Eigen::VectorXd r0 = eta - product.col(0);
-  if (pcg.restart_worse_than_zero && mean.dot(product.col(0)) - 2.0 * eta.dot(mean) > 0.0) {
-    mean.setZero();
-    r0 = eta;
-    summary.restarted_columns = 1;
+  if (pcg.restart_worse_than_zero) {
+    summary.restarted_columns =
+        restart_worse_than_zero(rhs_.leftCols(1), product.leftCols(1), solution_.leftCols(1), r0);
   }
   Eigen::MatrixXd& step = workspace_.Z;
   step.resize(n, 1 + d);
@@ -39,9 +36,9 @@ PcgSummary StateRecovery::kept_step(const SpdOperator& A, const PcgOptions& pcg)
   A.multiply(solution_, product);  // both residuals by one product
   Eigen::MatrixXd& residual = workspace_.R;
   residual = rhs_ - product;
-  // The step raised the mean's A-norm error (zᵀAz > 2 zᵀr₀, Az = r₀ − r₁): keep μ₀ (pcg.h).
+  // A step that raised the mean's A-norm error keeps μ₀ (pcg.h).
   const auto z = step.col(0);
-  if (z.dot(r0 - residual.col(0)) > 2.0 * z.dot(r0)) {
+  if (refinement_step_raised_error(z, r0, residual.col(0))) {
     mean -= z;
     residual.col(0) = r0;
   }
@@ -50,8 +47,7 @@ PcgSummary StateRecovery::kept_step(const SpdOperator& A, const PcgOptions& pcg)
   summary.residual_norm = Eigen::VectorXd::Constant(1, residual.col(0).norm());
   // Further steps of the mean only while each one at least halves its residual (pcg.h).
   const bool done = !(summary.residual_norm[0] < 0.5 * r0.norm()) ||
-                    (pcg.relative_tolerance > 0.0 &&
-                     summary.residual_norm[0] <= pcg.relative_tolerance * eta.norm());
+                    meets_tolerance(pcg, summary.residual_norm[0], eta.norm());
   if (pcg.max_iterations <= 1 || done) return summary;
   PcgOptions rest = pcg;
   rest.max_iterations -= 1;
@@ -66,10 +62,7 @@ RecoveryResult StateRecovery::solve_kept(const SpdOperator& A, const Eigen::Vect
   RecoveryResult result;
   result.mode = options_.mode;
   fill_rhs(eta);
-  PcgOptions pcg = pcg_options();
-  if (options_.mode == RecoveryMode::kFixedIterations) {
-    pcg.max_iterations = std::min(pcg.max_iterations, options_.iterations_after_refresh);
-  }
+  const PcgOptions pcg = pcg_options(options_.iterations_after_refresh);
   const int d = block_dim_;
   const double target = options_.mode == RecoveryMode::kTolerance ? options_.relative_tolerance
                                                                   : options_.refresh_residual;

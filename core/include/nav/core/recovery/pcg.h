@@ -163,4 +163,19 @@ PcgSummary solve_refinement(const SpdOperator& A, const Preconditioner& M,
                             Eigen::Ref<Eigen::MatrixXd> X, const PcgOptions& options,
                             PcgWorkspace& workspace);
 
+/// The rules solve_refinement applies per column, for callers that take a refinement step
+/// their own way (the kept-factor recovery, state_recovery.h):
+/// restarts from zero (X = 0, R = B) every column whose warm start is further from the solution
+/// than zero in the A-norm (PcgOptions::restart_worse_than_zero); AX = A X. Returns the count.
+int restart_worse_than_zero(const Eigen::Ref<const Eigen::MatrixXd>& B,
+                            const Eigen::Ref<const Eigen::MatrixXd>& AX,
+                            Eigen::Ref<Eigen::MatrixXd> X, Eigen::Ref<Eigen::MatrixXd> R);
+/// A column is done when its residual norm meets the relative tolerance (never when it is 0).
+bool meets_tolerance(const PcgOptions& options, double residual_norm, double rhs_norm);
+/// The step z, which took the residual from r_before to r_after, raised the A-norm error:
+/// zᵀAz > 2 zᵀr_before, with Az = r_before − r_after.
+bool refinement_step_raised_error(const Eigen::Ref<const Eigen::VectorXd>& z,
+                                  const Eigen::Ref<const Eigen::VectorXd>& r_before,
+                                  const Eigen::Ref<const Eigen::VectorXd>& r_after);
+
 }  // namespace nav::core

@@ -109,7 +109,9 @@ class StateRecovery {
   /// kFactor with keep_factor_equal: brings kept_ to Λ (refactoring when it must).
   Status update_kept(const InformationMatrix& lambda, bool refactor);
   RecoveryResult solve_packed(const InformationMatrix& lambda, const Eigen::VectorXd& eta);
-  PcgOptions pcg_options() const;
+  /// The PCG / refinement options of the mode; `iteration_cap` >= 0 lowers the fixed-iteration
+  /// budget (kFixedIterations only).
+  PcgOptions pcg_options(int iteration_cap = -1) const;
   void note_convergence(RecoveryResult& result, const PcgSummary& summary) const;
   RecoveryResult solve_direct(const Eigen::SparseMatrix<double>& lambda,
                               const Eigen::VectorXd& eta);
