@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "cholmod_view.h"
+#include "ldl_pivot.h"
 #include "ldl_solve.h"
 
 namespace nav::core {
@@ -403,7 +404,13 @@ Status KeptEqualFactor::update(const InformationMatrix& lambda) {
       changed.push_back(b);
     }
   }
-  for (int b : replaced) delete_block(b);
+  // The robot's one neighbour keeps its rows when only its diagonal block changed (ldl_pivot.h).
+  const int kept = replaced.size() == 2 ? replaced[1] : 0;
+  for (int b : replaced) {
+    if (b != kept) delete_block(b);
+  }
+  const bool in_place = kept != 0 && modify_pivot(lambda, kept);
+  if (kept != 0 && !in_place) delete_block(kept);
   if (!changed.empty() && !rank_update(lambda, changed)) {
     const Status s = cholmod_failure("update (rank update)", factor_->c);
     reset();
@@ -413,7 +420,10 @@ Status KeptEqualFactor::update(const InformationMatrix& lambda) {
     slot_.push_back(next_slot_++);
     present_.push_back(0);
   }
-  std::vector<int> added(replaced.begin() + 1, replaced.end());  // the robot last
+  std::vector<int> added;  // the robot last
+  for (int b : replaced) {
+    if (b != 0 && !(in_place && b == kept)) added.push_back(b);
+  }
   for (int b = n_old; b < n_new; ++b) added.push_back(b);
   added.push_back(0);
   for (int b : added) add_block(lambda, b);
@@ -422,12 +432,34 @@ Status KeptEqualFactor::update(const InformationMatrix& lambda) {
     reset();
     return s;
   }
-  last_update_.rows_replaced = static_cast<int>(replaced.size());
+  last_update_.rows_replaced = static_cast<int>(replaced.size()) - (in_place ? 1 : 0);
+  last_update_.pivots_modified = in_place ? 1 : 0;
   last_update_.rows_added = n_new - n_old;
   last_update_.blocks_updated = static_cast<int>(changed.size());
   added.insert(added.end(), changed.begin(), changed.end());
+  if (in_place) added.push_back(kept);
   copy_rows(lambda, added);
   return Status::Ok();
+}
+
+bool KeptEqualFactor::modify_pivot(const InformationMatrix& lambda, int block) {
+  // Its couplings to the blocks in the factor now (all but the deleted robot and the states
+  // appended since) must be unchanged: then its rows of L are (ldl_pivot.h).
+  const int n_old = factored_.num_blocks();
+  const auto coupling_unchanged = [&](const InformationMatrix& a, const InformationMatrix& b) {
+    for (int k = 0; k < a.num_neighbours(block); ++k) {
+      const int nb = a.neighbour(block, k);
+      if (nb == 0 || nb >= n_old) continue;
+      const auto* other = b.find_block(block, nb);
+      if (other == nullptr || *other != a.neighbour_block(block, k)) return false;
+    }
+    return true;
+  };
+  if (!coupling_unchanged(lambda, factored_) || !coupling_unchanged(factored_, lambda)) {
+    return false;
+  }
+  return detail::set_pivot_block(ldl(), static_cast<double*>(factor_->L->x), slot_row(block, 0),
+                                 lambda.diagonal_block(block));
 }
 
 detail::SimplicialLdl KeptEqualFactor::ldl() const {

@@ -297,7 +297,7 @@ RecoveryResult StateRecovery::solve_factor(const InformationMatrix& lambda,
   }
   const KeptFactorUpdate& u = kept_.last_update();
   result.refactored_blocks =
-      kept ? u.rows_replaced + u.rows_added + u.blocks_updated
+      kept ? u.rows_replaced + u.pivots_modified + u.rows_added + u.blocks_updated
            : static_cast<int>((lambda.dim() - factor_.factored_dim()) / block_dim_);
   result.refreshed = refresh;
   ++solves_since_refresh_;

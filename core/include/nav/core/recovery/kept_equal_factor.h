@@ -22,7 +22,10 @@
 // change reaches the factor in update():
 //   * the robot (block 0) and its neighbours in the previously factored Λ: prediction
 //     marginalises the robot (a Schur complement on its neighbours, not a PSD increment) and a
-//     kept robot becomes an appended block. Their rows are deleted and re-added whole;
+//     kept robot becomes an appended block. Their rows are deleted and re-added whole, except
+//     the robot's one neighbour when only its diagonal block changed: with the robot deleted no
+//     later row depends on it, so the change reaches only its pivot block, refactored in place
+//     (ldl_pivot.h) instead of row additions over its whole reach;
 //   * appended blocks: row-added into the next reserved slots;
 //   * any other block whose diagonal block changed (the older endpoint of a camera link): the
 //     increment ΔΛ over those blocks, PSD under the ESDF's fixed linearisation (a sum of link
@@ -54,7 +57,8 @@ struct SimplicialLdl;
 
 /// What the last update() did, all zero after factor() or reset() (diagnostics and tests).
 struct KeptFactorUpdate {
-  int rows_replaced = 0;   ///< blocks deleted and re-added (the robot and its neighbours)
+  int rows_replaced = 0;    ///< blocks deleted and re-added (the robot and its neighbours)
+  int pivots_modified = 0;  ///< the robot's neighbour, its change applied to its pivot block
   int rows_added = 0;      ///< appended blocks row-added into reserved slots
   int blocks_updated = 0;  ///< other blocks whose increment was applied by a rank update
   int update_rank = 0;     ///< columns of C₊ (rank update)
@@ -115,6 +119,9 @@ class KeptEqualFactor final : public Preconditioner {
   void delete_block(int block);
   void add_block(const InformationMatrix& lambda, int block);
   bool rank_update(const InformationMatrix& lambda, const std::vector<int>& changed);
+  /// Sets `block`'s new diagonal block in its pivot block in place (ldl_pivot.h) if nothing
+  /// else of its row changed; false (factor untouched) otherwise.
+  bool modify_pivot(const InformationMatrix& lambda, int block);
   void copy_rows(const InformationMatrix& lambda, const std::vector<int>& rows);
   /// The factor's arrays for the row-major solves (ldl_solve.h).
   detail::SimplicialLdl ldl() const;
