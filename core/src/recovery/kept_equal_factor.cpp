@@ -445,18 +445,12 @@ Status KeptEqualFactor::update(const InformationMatrix& lambda) {
 bool KeptEqualFactor::modify_pivot(const InformationMatrix& lambda, int block) {
   // Its couplings to the blocks in the factor now (all but the deleted robot and the states
   // appended since) must be unchanged: then its rows of L are (ldl_pivot.h).
-  const int n_old = factored_.num_blocks();
-  const auto coupling_unchanged = [&](const InformationMatrix& a, const InformationMatrix& b) {
-    for (int k = 0; k < a.num_neighbours(block); ++k) {
-      const int nb = a.neighbour(block, k);
-      if (nb == 0 || nb >= n_old) continue;
-      const auto* other = b.find_block(block, nb);
-      if (other == nullptr || *other != a.neighbour_block(block, k)) return false;
+  for (const InformationMatrix* m : {&lambda, static_cast<const InformationMatrix*>(&factored_)}) {
+    for (int k = 0; k < m->num_neighbours(block); ++k) {
+      const int nb = m->neighbour(block, k);
+      if (nb == 0 || nb >= factored_.num_blocks()) continue;
+      if (!increment(lambda, factored_, block, nb).isZero(0.0)) return false;
     }
-    return true;
-  };
-  if (!coupling_unchanged(lambda, factored_) || !coupling_unchanged(factored_, lambda)) {
-    return false;
   }
   return detail::set_pivot_block(ldl(), static_cast<double*>(factor_->L->x), slot_row(block, 0),
                                  lambda.diagonal_block(block));
