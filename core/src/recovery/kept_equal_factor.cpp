@@ -407,7 +407,7 @@ Status KeptEqualFactor::update(const InformationMatrix& lambda) {
   // The robot's one neighbour keeps its rows when only its diagonal block changed (ldl_pivot.h).
   const int kept = replaced.size() == 2 ? replaced[1] : 0;
   for (int b : replaced) {
-    if (b != kept) delete_block(b);
+    if (b == 0 || b != kept) delete_block(b);
   }
   const bool in_place = kept != 0 && modify_pivot(lambda, kept);
   if (kept != 0 && !in_place) delete_block(kept);
