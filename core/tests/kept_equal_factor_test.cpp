@@ -106,7 +106,7 @@ TEST(KeptEqualFactor, FollowsTheFiltersLambdaThroughPredictionsKeptStatesAndLink
     EXPECT_LT(solve_error(factor, filter.lambda(), columns), 1e-10) << columns << " columns";
   }
   EXPECT_LT(robot_column_error(factor, filter.lambda()), 1e-10);
-  int images = 0, pivots_modified = 0;
+  int images = 0, pivots_modified = 0, appended = 0;
   for (int image = 0; image < 30; ++image, ++images) {
     for (int p = 0; p < 3; ++p) filter.predict(false);  // the robot is marginalised
     filter.predict(true);                               // and kept at the image
@@ -126,6 +126,7 @@ TEST(KeptEqualFactor, FollowsTheFiltersLambdaThroughPredictionsKeptStatesAndLink
     const KeptFactorUpdate& u = factor.last_update();
     EXPECT_GE(u.rows_replaced + u.pivots_modified, 2);
     pivots_modified += u.pivots_modified;
+    appended += u.blocks_appended;
     EXPECT_EQ(factor.last_update().rows_added, 1);
     EXPECT_EQ(factor.last_update().downdate_rank, 0);
     if (factor.last_update().blocks_updated > 0) {
@@ -137,6 +138,9 @@ TEST(KeptEqualFactor, FollowsTheFiltersLambdaThroughPredictionsKeptStatesAndLink
   // second neighbour (a link to the robot) or the state was an end of a link between two older
   // states (22 of 30 images when written; the dense comparisons above check both paths).
   EXPECT_GE(pivots_modified, 20);
+  // The appended state's rows were formed as one block at every image; the robot and the
+  // re-added states, whose deleted rows left explicit zeros, went row by row.
+  EXPECT_EQ(appended, images);
 }
 
 TEST(KeptEqualFactor, OrdersTheNewestStatesLastAndStillFollowsLambda) {

@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "cholmod_view.h"
+#include "ldl_append.h"
 #include "ldl_pivot.h"
 #include "ldl_solve.h"
 
@@ -244,14 +245,27 @@ void KeptEqualFactor::delete_block(int block) {
 void KeptEqualFactor::add_block(const InformationMatrix& lambda, int block) {
   const int d = lambda.block_dim();
   const auto& diagonal = lambda.diagonal_block(block);
+  std::vector<detail::AppendCoupling> couplings;  // Λ_{block,nb}; the others enter later
+  for (int k = 0; k < lambda.num_neighbours(block); ++k) {
+    const int nb = lambda.neighbour(block, k);
+    if (present_[static_cast<size_t>(nb)]) {
+      couplings.push_back({slot_row(nb, 0), lambda.neighbour_block(block, k)});
+    }
+  }
+  const detail::AppendResult appended =
+      detail::append_block(factor_->L, &factor_->c, slot_row(block, 0), diagonal, couplings);
+  if (appended == detail::AppendResult::kOutOfMemory) return;  // c.status says why
+  present_[static_cast<size_t>(block)] = 1;
+  if (appended == detail::AppendResult::kAppended) {
+    ++last_update_.blocks_appended;
+    return;
+  }
+  // Row by row (a neighbour later in the factor, or rows the block left behind).
   std::vector<std::vector<Entry>> column(1);
   for (int j = 0; j < d; ++j) {
     column[0].clear();
-    for (int k = 0; k < lambda.num_neighbours(block); ++k) {
-      const int nb = lambda.neighbour(block, k);
-      if (!present_[static_cast<size_t>(nb)]) continue;  // its row enters later, with this column
-      const auto& coupling = lambda.neighbour_block(block, k);  // Λ_{block,nb}
-      for (int i = 0; i < d; ++i) column[0].emplace_back(slot_row(nb, i), coupling(j, i));
+    for (const auto& c : couplings) {
+      for (int i = 0; i < d; ++i) column[0].emplace_back(c.first_row + i, c.block(j, i));
     }
     for (int i = 0; i <= j; ++i) column[0].emplace_back(slot_row(block, i), diagonal(i, j));
     cholmod_sparse* r = to_cholmod(column, factor_->L->n, &factor_->c);
@@ -259,7 +273,6 @@ void KeptEqualFactor::add_block(const InformationMatrix& lambda, int block) {
     cholmod_rowadd(static_cast<size_t>(slot_row(block, j)), r, factor_->L, &factor_->c);
     cholmod_free_sparse(&r, &factor_->c);
   }
-  present_[static_cast<size_t>(block)] = 1;
 }
 
 namespace {

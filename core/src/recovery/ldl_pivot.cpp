@@ -61,23 +61,32 @@ bool set_pivot_block(const SimplicialLdl& L, double* value, int first,
   // old one may hold a short prediction's information, which the change would cancel.
   const Eigen::MatrixXd schur =
       0.5 * (diagonal + diagonal.transpose()) - older_contribution(L, value, first, d);
-  // Dense LDLᵀ without pivoting (the factor's order is fixed).
-  Eigen::MatrixXd unit = Eigen::MatrixXd::Identity(d, d);
-  Eigen::VectorXd pivot(d);
-  for (int j = 0; j < d; ++j) {
-    double dj = schur(j, j);
-    for (int k = 0; k < j; ++k) dj -= unit(j, k) * unit(j, k) * pivot[k];
-    if (!(dj > 0.0)) return false;
-    pivot[j] = dj;
-    for (int i = j + 1; i < d; ++i) {
-      double lij = schur(i, j);
-      for (int k = 0; k < j; ++k) lij -= unit(i, k) * unit(j, k) * pivot[k];
-      unit(i, j) = lij / dj;
-    }
-  }
+  Eigen::MatrixXd unit;
+  Eigen::VectorXd pivot;
+  if (!dense_ldl(schur, &unit, &pivot)) return false;
   for (int j = 0; j < d; ++j) {
     value[at(j, j)] = pivot[j];
     for (int i = j + 1; i < d; ++i) value[at(i, j)] = unit(i, j);
+  }
+  return true;
+}
+
+bool dense_ldl(const Eigen::MatrixXd& a, Eigen::MatrixXd* unit, Eigen::VectorXd* pivot) {
+  const auto d = a.rows();
+  *unit = Eigen::MatrixXd::Identity(d, d);
+  pivot->resize(d);
+  Eigen::MatrixXd& u = *unit;
+  Eigen::VectorXd& p = *pivot;
+  for (Eigen::Index j = 0; j < d; ++j) {
+    double dj = a(j, j);
+    for (Eigen::Index k = 0; k < j; ++k) dj -= u(j, k) * u(j, k) * p[k];
+    if (!(dj > 0.0)) return false;
+    p[j] = dj;
+    for (Eigen::Index i = j + 1; i < d; ++i) {
+      double lij = a(i, j);
+      for (Eigen::Index k = 0; k < j; ++k) lij -= u(i, k) * u(j, k) * p[k];
+      u(i, j) = lij / dj;
+    }
   }
   return true;
 }

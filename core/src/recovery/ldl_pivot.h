@@ -27,4 +27,8 @@ namespace nav::core::detail {
 bool set_pivot_block(const SimplicialLdl& L, double* value, int first,
                      const Eigen::MatrixXd& diagonal);
 
+/// Dense LDLᵀ without pivoting (the factor's order is fixed) of the lower triangle of `a`:
+/// `unit` unit lower triangular, `pivot` the diagonal of D. False when a pivot is not positive.
+bool dense_ldl(const Eigen::MatrixXd& a, Eigen::MatrixXd* unit, Eigen::VectorXd* pivot);
+
 }  // namespace nav::core::detail

@@ -26,7 +26,9 @@
 //     the robot's one neighbour when only its diagonal block changed: with the robot deleted no
 //     later row depends on it, so the change reaches only its pivot block, refactored in place
 //     (ldl_pivot.h) instead of row additions over its whole reach;
-//   * appended blocks: row-added into the next reserved slots;
+//   * appended blocks: added into the next reserved slots, all rows of a block at once when
+//     its couplings lie before it (ldl_append.h: one walk of the reach, one forward solve with
+//     the block's columns, one shift of each column), else row by row (cholmod_rowadd);
 //   * any other block whose diagonal block changed (the older endpoint of a camera link): the
 //     increment ΔΛ over those blocks, PSD under the ESDF's fixed linearisation (a sum of link
 //     terms Hᵀ R⁻¹ H), is split per connected group by an eigendecomposition into
@@ -60,6 +62,7 @@ struct KeptFactorUpdate {
   int rows_replaced = 0;    ///< blocks deleted and re-added (the robot and its neighbours)
   int pivots_modified = 0;  ///< the robot's neighbour, its change applied to its pivot block
   int rows_added = 0;      ///< appended blocks row-added into reserved slots
+  int blocks_appended = 0;  ///< blocks added as one block of rows (src/recovery/ldl_append.h)
   int blocks_updated = 0;  ///< other blocks whose increment was applied by a rank update
   int update_rank = 0;     ///< columns of C₊ (rank update)
   int downdate_rank = 0;   ///< columns of C₋ (downdate; 0 under the PSD premise)
