@@ -64,8 +64,15 @@ CovarianceBounds::CovarianceBounds(int block_dim, BoundsOptions options)
 
 void CovarianceBounds::set_robot_bound(const Eigen::MatrixXd& bound) {
   robot_bound_ = symmetric(bound);
-  robot_lambda_max_ = std::max(0.0, lambda_max_symmetric(robot_bound_));
+  robot_lambda_max_ = -1.0;  // set at every prediction, read once per image: computed then
 }
+
+double CovarianceBounds::robot_lambda_max() const {
+  return robot_lambda_max_ >= 0.0 ? robot_lambda_max_
+                                  : std::max(0.0, lambda_max_symmetric(robot_bound_));
+}
+
+double CovarianceBounds::lambda_max_sigma_bound() const { return lambda_sum_ + robot_lambda_max(); }
 
 void CovarianceBounds::store(int state, const Eigen::MatrixXd& bound) {
   if (static_cast<size_t>(state) >= entries_.size()) {
@@ -369,9 +376,9 @@ Status CovarianceBounds::update_robot(const Eigen::MatrixXd& H, const Eigen::Mat
     return Status::Error(StatusCode::kNotPositiveDefinite,
                          "CovarianceBounds::update_robot: innovation covariance not SPD");
   }
-  // A Kalman update only shrinks the bound (B+ <= B), so the stored λmax(B) stays a valid upper
-  // bound of λmax(B+) for L and ε (bounds.h C1): no eigen-solve per measurement. It is
-  // recomputed at the next predict_robot / set_recovery.
+  // A Kalman update only shrinks the bound (B+ <= B), so a cached λmax(B) stays a valid upper
+  // bound of λmax(B+) for L and ε (bounds.h C1); without one, λmax(B+) is computed when L is
+  // next read (robot_lambda_max).
   robot_bound_ = symmetric(posterior);
   return Status::Ok();
 }

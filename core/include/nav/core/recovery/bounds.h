@@ -145,10 +145,9 @@ class CovarianceBounds {
   bool contains(int state) const;
   /// Σ~_ii (state must be contained).
   const Eigen::MatrixXd& bound(int state) const;
-  /// Current certified bound of the robot covariance.
-  const Eigen::MatrixXd& robot_bound() const { return robot_bound_; }
+  const Eigen::MatrixXd& robot_bound() const { return robot_bound_; }  ///< the certified B_rr
   /// L = Σ_j λmax(B_jj) >= λmax(Σ) of the current bounds (valid while the bounds are).
-  double lambda_max_sigma_bound() const { return lambda_sum_ + robot_lambda_max_; }
+  double lambda_max_sigma_bound() const;
   double certificate_lambda() const { return certificate_lambda_; }  ///< L of the certificate
   int num_bounds() const { return num_bounds_; }
   /// Both ways; reading replaces the bounds and requires every bound to belong to a delayed
@@ -173,6 +172,7 @@ class CovarianceBounds {
   static bool joseph(const Eigen::MatrixXd& joint, const Eigen::MatrixXd& H,
                      const Eigen::MatrixXd& R, Eigen::MatrixXd* posterior);
   void set_robot_bound(const Eigen::MatrixXd& bound);
+  double robot_lambda_max() const;  ///< λmax(B_rr): the cached value or, if none, computed
   /// R_0ᵀ W R_0 + Σ R_jᵀ B_jj R_j, j in [max(first, 1), last): K2, and K3's T part.
   Eigen::MatrixXd weighted_residual(const Eigen::Ref<const Eigen::MatrixXd>& R, int first,
                                     int last, const Eigen::MatrixXd& W) const;
@@ -187,7 +187,7 @@ class CovarianceBounds {
   int num_bounds_ = 0;
   double lambda_sum_ = 0.0;
   Eigen::MatrixXd robot_bound_;
-  double robot_lambda_max_ = 0.0;
+  double robot_lambda_max_ = 0.0;  // an upper bound of λmax(robot_bound_); < 0: none cached
   Eigen::MatrixXd sigma_rr_hat_;
   double residual_frobenius_ = 0.0;
   double kappa_ = 0.0;

@@ -130,7 +130,10 @@ void CovarianceBounds::serialize(Archive& ar, int num_filter_blocks) {
   }
   const auto di = static_cast<Eigen::Index>(d);
   ar.matrix(robot_bound_, di, di, true, "robot bound");
-  ar(robot_lambda_max_, "robot bound λmax");
+  double robot_lambda = Archive::kReading ? 0.0 : robot_lambda_max();  // written computed
+  ar(robot_lambda, "robot bound λmax");
+  ar.check(robot_lambda >= 0, "negative robot bound λmax");
+  if constexpr (Archive::kReading) robot_lambda_max_ = robot_lambda;
   ar.matrix(sigma_rr_hat_, di, di, true, "recovered Σ_rr");
   ar(residual_frobenius_, "residual");
   ar.check(residual_frobenius_ >= 0, "negative recovery residual");
