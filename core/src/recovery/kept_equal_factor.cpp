@@ -417,13 +417,14 @@ Status KeptEqualFactor::update(const InformationMatrix& lambda) {
       changed.push_back(b);
     }
   }
-  // The robot's one neighbour keeps its rows when only its diagonal block changed (ldl_pivot.h).
-  const int kept = replaced.size() == 2 ? replaced[1] : 0;
+  // The robot's one neighbour keeps its rows when only its diagonal block changed (ldl_pivot.h);
+  // kept = -1 when the robot has more neighbours (never the robot itself).
+  const int kept = replaced.size() == 2 ? replaced[1] : -1;
   for (int b : replaced) {
-    if (b == 0 || b != kept) delete_block(b);
+    if (b != kept) delete_block(b);
   }
-  const bool in_place = kept != 0 && modify_pivot(lambda, kept);
-  if (kept != 0 && !in_place) delete_block(kept);
+  const bool in_place = kept > 0 && modify_pivot(lambda, kept);
+  if (kept > 0 && !in_place) delete_block(kept);
   if (!changed.empty() && !rank_update(lambda, changed)) {
     const Status s = cholmod_failure("update (rank update)", factor_->c);
     reset();
