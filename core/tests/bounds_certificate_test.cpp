@@ -213,5 +213,58 @@ TEST(BoundsCertificate, StoredBoundsGrowByThePredictionsRoundingAtTheNextRecover
   EXPECT_LT((bounds.bound(2) - before).norm(), 1e-9 * before.norm());
 }
 
+// Exact marginals renewed from a snapshot some images old (recovery/lagged_renewal.h): they
+// first grow by the rounding of the predictions since (that of the last image is applied by the
+// next set_recovery, as for every bound); a state a link tightened since keeps whichever of its
+// bound and the grown marginal has the smaller trace (both bound its marginal now).
+TEST(BoundsCertificate, LaggedRefreshGrowsTheMarginalsAndKeepsTheTighterOfLaterLinks) {
+  const Problem p = make_problem(8);
+  const int d = p.d, n = d * p.blocks;
+  CovarianceBounds bounds(d);
+  const Eigen::MatrixXd sigma_rr = p.sigma.topLeftCorner(d, d);
+  ASSERT_TRUE(bounds.initialize_robot(10.0 * sigma_rr).ok());
+  for (int i = 1; i < p.blocks; ++i) ASSERT_TRUE(bounds.insert(i).ok());
+  const Eigen::MatrixXd F = Eigen::MatrixXd::Identity(d, d), I = F;
+  const Eigen::MatrixXd Q = 1e-9 * I, zero = Eigen::MatrixXd::Zero(n, d);
+  ASSERT_TRUE(bounds.predict_robot(F, Q, false, -1).ok());
+  const BoundsSnapshot snapshot = bounds.snapshot();  // the renewal's Λ
+  ASSERT_TRUE(bounds.set_recovery(sigma_rr, zero, p.blocks).ok());
+  // Registrations with states 2 (precise) and 3 (nearly uninformative) after the snapshot.
+  for (const auto& [state, r] : {std::pair{2, 1e-8}, std::pair{3, 1e6}}) {
+    LinkProposal proposal;
+    ASSERT_TRUE(bounds.propose(state, p.sigma.block(state * d, 0, d, d), &proposal).ok());
+    ASSERT_TRUE(bounds.update(proposal, -I, I, r * I).ok());
+  }
+  ASSERT_TRUE(bounds.predict_robot(F, Q, false, -1).ok());
+  ASSERT_TRUE(bounds.set_recovery(sigma_rr, zero, p.blocks).ok());
+  const double applied = bounds.snapshot().growth - snapshot.growth;  // the image after
+  ASSERT_TRUE(bounds.predict_robot(F, Q, false, -1).ok());
+  const double pending = bounds.snapshot().growth - snapshot.growth - applied;
+  ASSERT_GT(applied, 1e-4);
+  ASSERT_GT(pending, 1e-4);
+  const Eigen::MatrixXd linked_2 = bounds.bound(2), linked_3 = bounds.bound(3);
+  // The earlier marginals; state 2's inflated (an upper bound still) so that its link wins.
+  Eigen::MatrixXd stacked(n, d);
+  for (int j = 0; j < p.blocks; ++j) {
+    stacked.middleRows(j * d, d) = p.sigma.block(j * d, j * d, d, d);
+  }
+  stacked.middleRows(2 * d, d) *= 1e3;
+  ASSERT_TRUE(bounds.refresh_exact(stacked, p.blocks, &snapshot).ok());
+  const double tau = bounds.options().rounding_margin;
+  const auto grown = [&](int i) {
+    Eigen::MatrixXd padded = (1.0 + tau) * stacked.middleRows(i * d, d);
+    padded.diagonal() += tau * stacked.middleRows(i * d, d).diagonal();
+    return Eigen::MatrixXd(std::exp(applied) * padded);
+  };
+  ASSERT_LT(linked_2.trace(), grown(2).trace());
+  ASSERT_GT(linked_3.trace(), grown(3).trace());
+  EXPECT_EQ(bounds.bound(2), linked_2);
+  for (int i : {1, 3, 4, 5}) {
+    EXPECT_LT((bounds.bound(i) - grown(i)).norm(), 1e-12 * grown(i).norm()) << "state " << i;
+  }
+  ASSERT_TRUE(bounds.set_recovery(sigma_rr, zero, p.blocks).ok());
+  EXPECT_LT((bounds.bound(2) - std::exp(pending) * linked_2).norm(), 1e-12 * linked_2.norm());
+}
+
 }  // namespace
 }  // namespace nav::core

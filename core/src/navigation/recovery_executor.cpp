@@ -20,11 +20,7 @@ void run_recovery_job(StateRecovery& recovery, const InformationMatrix& lambda,
   output.solution = recovery.solution();
   const ExactMarginals* exact = recovery.refreshed_marginals();
   if (!output.result.status.ok() || !output.result.refreshed || exact == nullptr) return;
-  const int d = exact->block_dim();
-  output.marginals.resize(Eigen::Index{exact->num_blocks()} * d, d);
-  for (int j = 0; j < exact->num_blocks(); ++j) {
-    output.marginals.middleRows(Eigen::Index{j} * d, d) = exact->marginal(j);
-  }
+  output.marginals = exact->marginals();
 }
 
 InlineRecoveryExecutor::InlineRecoveryExecutor(int block_dim, const StateRecoveryOptions& options)

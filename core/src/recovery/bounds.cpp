@@ -94,6 +94,7 @@ void CovarianceBounds::store(int state, const Eigen::MatrixXd& bound) {
     ++num_bounds_;
   }
   e.present = true;
+  e.stored_epoch = epoch_;
   e.bound = std::move(candidate);
   e.lambda_max = std::max(0.0, lambda_max_symmetric(e.bound));
   lambda_sum_ += e.lambda_max;
@@ -109,6 +110,8 @@ Status CovarianceBounds::initialize_robot(const Eigen::MatrixXd& P0) {
   entries_.clear();
   num_bounds_ = 0;
   epoch_ = 0;
+  pending_growth_ = 0.0;
+  growth_total_ = 0.0;
   certificate_lambda_ = 0.0;
   lambda_sum_ = 0.0;
   set_robot_bound(P0);
@@ -140,6 +143,7 @@ Status CovarianceBounds::predict_robot(const Eigen::MatrixXd& F, const Eigen::Ma
   }
   set_robot_bound((1.0 + rounding) * (FBF + Q));
   pending_growth_ += std::log1p(rounding);
+  growth_total_ += std::log1p(rounding);
   return Status::Ok();
 }
 
@@ -291,7 +295,7 @@ Status CovarianceBounds::refresh_exact(const ExactMarginals& exact, int num_stat
 }
 
 Status CovarianceBounds::refresh_exact(const Eigen::Ref<const Eigen::MatrixXd>& marginals,
-                                       int num_states) {
+                                       int num_states, const BoundsSnapshot* since) {
   const int d = block_dim_;
   const auto blocks = static_cast<int>(marginals.rows() / d);
   bool ok = marginals.cols() == d && marginals.rows() % d == 0 && blocks >= 1 &&
@@ -304,7 +308,22 @@ Status CovarianceBounds::refresh_exact(const Eigen::Ref<const Eigen::MatrixXd>& 
                              " rows by " + std::to_string(d) + ", every state with a bound) " +
                              "for a filter of " + std::to_string(num_states) + " blocks");
   }
-  for (int j = 1; j < blocks; ++j) reset_to_exact(j, marginals.middleRows(j * d, d));
+  if (since == nullptr) {
+    for (int j = 1; j < blocks; ++j) reset_to_exact(j, marginals.middleRows(j * d, d));
+    return Status::Ok();
+  }
+  // The rounding of the predictions after that Λ, less what the next set_recovery applies.
+  const double grow = std::exp(std::max(0.0, growth_total_ - pending_growth_ - since->growth));
+  for (int j = 1; j < blocks; ++j) {
+    const Eigen::MatrixXd marginal = grow * marginals.middleRows(j * d, d);
+    // A link since the snapshot tightened j: both bound Σ_jj now; the smaller trace stays.
+    const Entry& e = entries_[static_cast<size_t>(j)];
+    if (e.stored_epoch > since->epoch &&
+        e.bound.trace() <= padded(marginal, options_.rounding_margin).trace()) {
+      continue;
+    }
+    reset_to_exact(j, marginal);
+  }
   return Status::Ok();
 }
 

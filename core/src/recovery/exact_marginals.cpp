@@ -404,6 +404,13 @@ bool ExactMarginals::in_pattern(int a, int b) const {
   return true;
 }
 
+Eigen::MatrixXd ExactMarginals::marginals() const {
+  const Eigen::Index d = block_dim();
+  Eigen::MatrixXd stacked(num_blocks() * d, d);
+  for (int b = 0; b < num_blocks(); ++b) stacked.middleRows(b * d, d) = marginal(b);
+  return stacked;
+}
+
 Eigen::MatrixXd ExactMarginals::marginal(int block) const {
   check_block(block, num_blocks(), "ExactMarginals::marginal");
   const int d = impl_->block_dim;

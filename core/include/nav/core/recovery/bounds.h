@@ -37,8 +37,8 @@
 // the robot's prior bound is >= its covariance and the residual handed to set_recovery is the
 // true one (or ρ >= its spectral norm), every Σ~_ii - Σ_ii is PSD up to rounding, whatever the
 // CG budget. Without it: the paper's Algorithm 1 (κ = 0), conservative for exact recovery only.
-// Costs: O(d³) per call, independent of the map size, except set_recovery with the residual
-// matrix (K2) and refresh_exact: O(n d³), once per image. Not thread-safe.
+// Costs: O(d³) per call, except set_recovery with the residual matrix (K2) and refresh_exact:
+// O(n d³), once per image. Not thread-safe.
 
 #include <Eigen/Core>
 #include <functional>
@@ -66,9 +66,15 @@ struct BoundsOptions {
 
 /// The joint used for a link proposal between the robot r and state i (paper eq. 6).
 struct LinkProposal {
-  int state = -1;            ///< i
-  Eigen::MatrixXd joint;     ///< 2d x 2d [Σ_rr Σ_ri; Σ_ir Σ~_ii], certified (file comment)
-  double kappa = 0;          ///< κ of the certified joint (0 when not certifying)
+  int state = -1;         ///< i
+  Eigen::MatrixXd joint;  ///< 2d x 2d [Σ_rr Σ_ri; Σ_ir Σ~_ii], certified (file comment)
+  double kappa = 0;       ///< κ of the certified joint (0 when not certifying)
+};
+
+/// When an earlier Λ was taken (CovarianceBounds::snapshot()).
+struct BoundsSnapshot {
+  long epoch = 0;       ///< set_recovery calls before it
+  double growth = 0.0;  ///< Σ log(1 + ρ) of the predictions before it
 };
 
 class CovarianceBounds {
@@ -85,20 +91,16 @@ class CovarianceBounds {
   /// every stored bound gets too at the next set_recovery (refresh_exact of Λ clears it).
   Status predict_robot(const Eigen::MatrixXd& F, const Eigen::MatrixXd& Q, bool keep_current,
                        int kept_state);
-  /// A measurement of the robot alone, z = h(x_r) + v, v ~ N(0, R), linearised with H (m x d):
-  /// Joseph-form Kalman update of the robot bound. The filter's robot marginal after a unary
-  /// update is exactly the Kalman update of its prior marginal, monotone in the prior, so B_rr
-  /// >= Σ_rr still holds: B_rr (and every new state's bound) does not grow unaided. O(d³).
-  /// kNotPositiveDefinite (bound unchanged) if H B Hᵀ + R is not SPD.
+  /// A measurement of the robot alone, z = h(x_r) + v, v ~ N(0, R), H (m x d): Joseph-form Kalman
+  /// update of B_rr. The filter's robot marginal after it is the update of its prior marginal,
+  /// monotone in the prior: B_rr >= Σ_rr holds. kNotPositiveDefinite (unchanged) if HBHᵀ + R is
+  /// not SPD. O(d³).
   Status update_robot(const Eigen::MatrixXd& H, const Eigen::MatrixXd& R);
-  /// Inserts delayed state i with the robot's current bound (an augmentation without prediction).
-  Status insert(int state);
-  /// Hands in the recovery of this snapshot: sym(Σ^_rr) and an upper bound ρ of the true
-  /// residual's spectral norm ‖E_r - ΛX‖₂ of the covariance columns (column_residual_spectral;
-  /// the Frobenius norm is valid too, looser): κ by (K1) with RᵀR <= ρ² I.
-  /// `num_states` is the filter's number of blocks: every non-robot block must have a bound
-  /// (kInvalidArgument otherwise: the certificate would be void). Computes κ and tightens the
-  /// robot bound (certifying) or sets it to Σ^_rr (not certifying).
+  Status insert(int state);  ///< state i gets the robot's bound (augmentation, no prediction)
+  /// Hands in the recovery of this snapshot: sym(Σ^_rr) and ρ >= ‖E_r - ΛX‖₂ of the covariance
+  /// columns (column_residual_spectral, or the looser Frobenius norm): κ by (K1), RᵀR <= ρ² I.
+  /// Every non-robot block of the filter's `num_states` must have a bound (kInvalidArgument: the
+  /// certificate would be void). Computes κ and tightens B_rr (certifying) or sets it to Σ^_rr.
   Status set_recovery(const Eigen::MatrixXd& sigma_rr, double residual_frobenius, int num_states);
   /// Same with the true residual matrix R = E_r - ΛX (n x d, StateRecovery::column_residual()):
   /// κ by the smallest of K1, K2 and K3, whose input `old_states` (e.g. StateRecovery::
@@ -107,51 +109,48 @@ class CovarianceBounds {
   Status set_recovery(const Eigen::MatrixXd& sigma_rr,
                       const Eigen::Ref<const Eigen::MatrixXd>& residual, int num_states,
                       const std::function<OldStateEnergy()>& old_states = {});
-  /// κ of the last set_recovery (0 when not certifying).
-  double kappa() const { return kappa_; }
+  double kappa() const { return kappa_; }  ///< κ of the last set_recovery (0: not certifying)
 
   /// Resets every bound (the robot's too) to the exact marginal of the current Λ plus the
   /// rounding margin (file comment). Call before set_recovery of the same Λ. kInvalidArgument
   /// if the marginals' blocks do not match the filter's `num_states` or a state has no bound.
   Status refresh_exact(const ExactMarginals& exact, int num_states);
+  /// Of the current Λ, for refresh_exact: the epoch and Σ log(1 + ρ) of the predictions so far.
+  BoundsSnapshot snapshot() const { return {epoch_, growth_total_}; }
   /// The same from the exact Σ_jj of an EARLIER Λ of this filter with m <= num_states blocks
-  /// (a recovery job's snapshot; block j in rows [j d, (j+1) d) of `marginals`, m d x d): resets
-  /// states 1..m-1 only; later states and the robot keep their bounds. Valid as Λ only gained
-  /// PSD terms since (file comment). kInvalidArgument for a bad shape or a state without bound.
-  Status refresh_exact(const Eigen::Ref<const Eigen::MatrixXd>& marginals, int num_states);
+  /// (block j in rows [j d, (j+1) d) of `marginals`, m d x d): resets states 1..m-1 only; later
+  /// states and the robot keep their bounds. Valid as Λ only gained PSD terms since (file
+  /// comment). With `since` (that Λ's snapshot()) the marginals first grow by the predictions'
+  /// rounding since, and a state a link tightened since keeps the smaller-trace of the two.
+  /// kInvalidArgument for a bad shape or a state without bound.
+  Status refresh_exact(const Eigen::Ref<const Eigen::MatrixXd>& marginals, int num_states,
+                       const BoundsSnapshot* since = nullptr);
 
   /// The joint for a proposal between the robot and state i, from the recovered cross
   /// covariance Σ^_ir (rows of block i of the robot column). kUnknownState if i has no bound.
   Status propose(int state, const Eigen::MatrixXd& sigma_ir, LinkProposal* proposal) const;
-  /// Covariance of the offset of the first two elements, x_i[0:2] − x_r[0:2], under the joint
-  /// propose() would build from a Σ^_ir whose top-left 2x2 is `sigma_ir_top_left` (rr + ii − ir
-  /// − irᵀ, same inflations, same floating-point operations: equal to computing it from
-  /// propose()'s joint), without building the 2d x 2d joint: a cheap test per link candidate.
-  /// kUnknownState if i has no bound.
+  /// Covariance of x_i[0:2] − x_r[0:2] under propose()'s joint for a Σ^_ir of top-left 2x2
+  /// `sigma_ir_top_left` (rr + ii − ir − irᵀ, the same inflations and floating-point operations)
+  /// without building the joint: a cheap test per link candidate. kUnknownState without bound.
   Status offset_covariance_2d(int state, const Eigen::Matrix2d& sigma_ir_top_left,
                               Eigen::Matrix2d* covariance) const;
 
-  /// A successful registration z = h(x_r, x_i) + v, v ~ N(0, R), linearised with
-  /// H = [H_r | H_i] (m x d each): Joseph-form Kalman update of the proposal's joint,
-  ///   K = P Hᵀ (H P Hᵀ + R)⁻¹,  P+ = (I - K H) P (I - K H)ᵀ + K R Kᵀ,
-  /// and Σ~_ii <- sym(P+_ii). Use the same H and R as the filter update. When certifying, the
-  /// correlation-free candidates (file comment) are updated too and the smallest-trace
-  /// posterior kept, for Σ~_ii and for the robot bound. kNotPositiveDefinite if no candidate's
-  /// innovation covariance is SPD (possible only without certification, from a stale
-  /// recovery): the bound is then left unchanged.
+  /// A registration z = h(x_r, x_i) + v, v ~ N(0, R), H = [H_r | H_i] (m x d each, as the filter
+  /// update's): Joseph-form update of the proposal's joint P, K = P Hᵀ (H P Hᵀ + R)⁻¹, P+ = (I -
+  /// K H) P (I - K H)ᵀ + K R Kᵀ, Σ~_ii <- sym(P+_ii); certifying, also of the correlation-free
+  /// candidates (file comment), keeping the smallest trace for Σ~_ii and B_rr. kNotPositiveDefinite
+  /// (unchanged) if no innovation covariance is SPD (only uncertified, from a stale recovery).
   Status update(const LinkProposal& proposal, const Eigen::MatrixXd& H_r,
                 const Eigen::MatrixXd& H_i, const Eigen::MatrixXd& R);
 
   bool contains(int state) const;
-  /// Σ~_ii (state must be contained).
-  const Eigen::MatrixXd& bound(int state) const;
+  const Eigen::MatrixXd& bound(int state) const;  ///< Σ~_ii (state must be contained)
   const Eigen::MatrixXd& robot_bound() const { return robot_bound_; }  ///< the certified B_rr
-  /// L = Σ_j λmax(B_jj) >= λmax(Σ) of the current bounds (valid while the bounds are).
-  double lambda_max_sigma_bound() const;
+  double lambda_max_sigma_bound() const;  ///< L = Σ_j λmax(B_jj) >= λmax(Σ), current bounds
   double certificate_lambda() const { return certificate_lambda_; }  ///< L of the certificate
   int num_bounds() const { return num_bounds_; }
-  /// Both ways; reading replaces the bounds and requires every bound to belong to a delayed
-  /// state 1..num_filter_blocks-1 (core/serialization/map_serialization.h, section "BNDS").
+  /// Both ways; reading replaces the bounds, each of a state 1..num_filter_blocks-1
+  /// (core/serialization/map_serialization.h, section "BNDS").
   template <class Archive>
   void serialize(Archive& ar, int num_filter_blocks);
 
@@ -160,22 +159,22 @@ class CovarianceBounds {
     bool present = false;
     Eigen::MatrixXd bound;
     double lambda_max = 0.0;
-    // The bound as it was at set_recovery() of snapshot `snapshot_epoch` (see file comment).
-    Eigen::MatrixXd snapshot_bound;
+    Eigen::MatrixXd snapshot_bound;  // as it was at set_recovery() of epoch snapshot_epoch
     double snapshot_lambda_max = 0.0;
     long snapshot_epoch = -1;
+    long stored_epoch = -1;  // epoch_ when store() last set the bound
   };
   void store(int state, const Eigen::MatrixXd& bound);
   void reset_to_exact(int state, const Eigen::MatrixXd& exact_marginal);  ///< + rounding margin
   void apply_pending_growth();  ///< every stored bound *= exp(pending_growth_)
-  /// Joseph-form posterior of `joint` (2d x 2d); false if S is not SPD or the result not finite.
+  /// Joseph-form posterior of the 2d x 2d `joint`; false if S is not SPD or it is not finite.
   static bool joseph(const Eigen::MatrixXd& joint, const Eigen::MatrixXd& H,
                      const Eigen::MatrixXd& R, Eigen::MatrixXd* posterior);
   void set_robot_bound(const Eigen::MatrixXd& bound);
   double robot_lambda_max() const;  ///< λmax(B_rr): the cached value or, if none, computed
   /// R_0ᵀ W R_0 + Σ R_jᵀ B_jj R_j, j in [max(first, 1), last): K2, and K3's T part.
-  Eigen::MatrixXd weighted_residual(const Eigen::Ref<const Eigen::MatrixXd>& R, int first,
-                                    int last, const Eigen::MatrixXd& W) const;
+  Eigen::MatrixXd weighted_residual(const Eigen::Ref<const Eigen::MatrixXd>& R, int first, int last,
+                                    const Eigen::MatrixXd& W) const;
   /// set_recovery's common part; kappa_squared(W) returns an upper bound of κ̄².
   Status set_recovery_with(const Eigen::MatrixXd& sigma_rr, double residual_frobenius,
                            int num_states,
@@ -192,9 +191,10 @@ class CovarianceBounds {
   double residual_frobenius_ = 0.0;
   double kappa_ = 0.0;
   Eigen::MatrixXd certificate_robot_bound_;  // W: the robot bound frozen at set_recovery
-  double certificate_lambda_ = 0.0;  // L frozen at set_recovery
-  long epoch_ = 0;                   // incremented by set_recovery
-  double pending_growth_ = 0.0;      // Σ log(1 + ρ) of the predictions since set_recovery
+  double certificate_lambda_ = 0.0;          // L frozen at set_recovery
+  long epoch_ = 0;                           // incremented by set_recovery
+  double pending_growth_ = 0.0;              // Σ log(1 + ρ) of the predictions since set_recovery
+  double growth_total_ = 0.0;                // Σ log(1 + ρ) of every prediction
 };
 
 }  // namespace nav::core

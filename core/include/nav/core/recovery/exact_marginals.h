@@ -78,6 +78,8 @@ class ExactMarginals {
 
   /// Sigma_bb, block_dim x block_dim, exact. O(block_dim^2 log) lookups, no solve.
   Eigen::MatrixXd marginal(int block) const;
+  /// Every marginal stacked: block b in rows [b d, (b + 1) d) of num_blocks() d x d.
+  Eigen::MatrixXd marginals() const;
 
   /// Joint covariance of blocks a and b: 2d x 2d [[S_aa S_ab]; [S_ba S_bb]] (a == b allowed:
   /// then all four quadrants equal S_aa). When S_ab is inside the pattern of L (e.g. a and b
