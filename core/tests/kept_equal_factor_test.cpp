@@ -10,11 +10,15 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <cmath>
 #include <random>
+#include <vector>
 
 #include "nav/core/filter/esdf.h"
 #include "nav/core/posegraph/g2o.h"
 #include "nav/core/posegraph/replay.h"
+#include "nav/core/recovery/consistency.h"
+#include "nav/core/recovery/exact_marginals.h"
 #include "nav/testing/data.h"
 
 namespace nav::core {
@@ -246,6 +250,61 @@ TEST(KeptEqualFactor, RecoveryConvergesInOneIterationPerStepOnAReplayedPoseGraph
   // rebuilt at every step; the bounds' refreshes still follow the interval alone.
   const KeptReplay refined = replay_kept(path, 1e-300);
   EXPECT_EQ(refined.refreshes, (refined.steps + 9) / 10);
+}
+
+// The renewal schedule of the kept factor (recovery_options.h refresh_growth, renewal_lag): a
+// refresh at the first step and whenever the map's size passes a power of 1.5, none while
+// a lagged one is in flight; every 10 steps a renewal started instead, taken 3 steps later; the
+// bounds conservative at the end.
+TEST(KeptEqualFactor, RenewalsFollowTheMapsGrowthThenTheIntervalWithTheirLag) {
+  NAV_REQUIRE_DATA(path, "posegraphs/smallGrid3D.g2o");
+  ReplayOptions options;
+  options.recovery.preconditioner = RecoveryPreconditioner::kFactor;
+  options.recovery.keep_factor_equal = true;
+  options.recovery.refresh_interval = 10;
+  options.recovery.refresh_growth = 0.5;
+  options.recovery.renewal_lag = 3;
+  const PoseGraph graph = read_g2o(path.string());
+  PoseGraphReplay replay(graph, options);
+  ASSERT_TRUE(replay.start().ok());
+  // The powers of 1.5 the map's size passes: 1, 2 (1.5), 3 (2.25), 4 (3.4), 6 (5.1), 8 (7.6), ...
+  std::vector<int> powers;
+  for (double p = 1.0; p < 1e6; p *= 1.5) powers.push_back(static_cast<int>(std::ceil(p)));
+  int since = 0, previous = 0, in_flight_age = -1, steps = 0;
+  int refreshes = 0, started = 0, taken = 0;
+  while (!replay.done()) {
+    RecoveryResult r;
+    ASSERT_TRUE(replay.step(&r).ok()) << r.status.to_string();
+    const int blocks = replay.filter().num_blocks();
+    bool passed = false;
+    for (int p : powers) passed = passed || (previous < p && p <= blocks);
+    previous = blocks;
+    // The rules, step by step, in the order the recovery applies them.
+    const bool refresh = in_flight_age < 0 && (steps == 0 || passed);
+    if (refresh) since = 0;
+    const bool take = in_flight_age >= 3;
+    if (take) in_flight_age = -1;
+    const bool start = since >= 10 && in_flight_age < 0;
+    if (start) since = 0, in_flight_age = 0;
+    EXPECT_EQ(r.refreshed, refresh) << "step " << steps << ", " << blocks << " blocks";
+    EXPECT_EQ(r.renewed_earlier, take) << "step " << steps;
+    EXPECT_EQ(r.renewal_started, start) << "step " << steps;
+    refreshes += refresh, taken += take, started += start;
+    if (in_flight_age >= 0) ++in_flight_age;
+    ++since, ++steps;
+  }
+  EXPECT_GE(refreshes, 5);
+  EXPECT_GE(taken, 3);
+  EXPECT_GE(started - taken, 0);
+  // The bounds renewed from the earlier Λs stay above the exact marginals of the end.
+  const Esdf& filter = replay.filter();
+  const ExactMarginals exact =
+      ExactMarginals::compute(filter.information().to_sparse(), filter.information().block_dim());
+  for (int b = 1; b < filter.num_blocks(); ++b) {
+    double min_eig = 0.0;
+    EXPECT_TRUE(is_conservative(replay.bounds().bound(b), exact.marginal(b), 1e-9, &min_eig))
+        << "state " << b << ": " << min_eig;
+  }
 }
 
 }  // namespace

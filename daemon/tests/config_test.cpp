@@ -153,6 +153,30 @@ TEST(Config, KeptFactorRecentStates) {
   EXPECT_EQ(e.key_path(), "filter.recovery_kept_recent_states");
 }
 
+TEST(Config, RenewalLagAndGrowth) {
+  EXPECT_EQ(parse_config(kMinimal).filter.recovery_renewal_lag, 0);
+  const std::string kept = std::string(kMinimal) +
+                           "filter: {recovery_preconditioner: kept_factor, " +
+                           "recovery_refresh_interval: 40, recovery_renewal_lag: ";
+  EXPECT_EQ(parse_config(kept + "8}\n").filter.recovery_renewal_lag, 8);
+  EXPECT_EQ(parse_config(kept + "8}\n").filter.recovery_refresh_interval, 40);
+  EXPECT_EQ(parse_config(kMinimal).filter.recovery_refresh_growth, 0.0);
+  EXPECT_EQ(parse_config(std::string(kMinimal) + "filter: {recovery_refresh_growth: 0.25}\n")
+                .filter.recovery_refresh_growth,
+            0.25);
+  EXPECT_EQ(
+      expect_error(std::string(kMinimal) + "filter: {recovery_refresh_growth: -1}\n").key_path(),
+      "filter.recovery_refresh_growth");
+  for (const std::string& bad :
+       {kept + "40}\n", kept + "-1}\n",
+        std::string(kMinimal) + "filter: {recovery_preconditioner: factor, "
+                                "recovery_refresh_interval: 40, recovery_renewal_lag: 8}\n",
+        std::string(kMinimal) + "filter: {recovery_renewal_lag: 1}\n"}) {
+    const ConfigError e = expect_error(bad);
+    EXPECT_EQ(e.key_path(), "filter.recovery_renewal_lag") << bad;
+  }
+}
+
 TEST(Config, RegistrationSigningKeys) {
   NavdConfig c = parse_config(kMinimal);
   EXPECT_TRUE(c.lcm.registration_signing.key_file.empty());  // off by default

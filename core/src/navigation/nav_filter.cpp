@@ -34,6 +34,7 @@ StateRecoveryOptions filter_thread_recovery(const NavFilterOptions& options) {
   o.mode = RecoveryMode::kFixedIterations;
   o.iterations_per_step = 0;
   o.preconditioner = RecoveryPreconditioner::kBlockJacobi;  // no factorisation on this thread
+  o.renewal_lag = 0;
   return o;
 }
 
@@ -62,6 +63,7 @@ RecoverySchedule make_schedule(const NavFilterOptions& o) {
   if (!o.recovery_thread) return {};
   StateRecoveryOptions job = o.recovery;
   job.recompute_true_residual = false;
+  job.renewal_lag = 0;  // the job is already beside the filter; its renewals go with its result
   std::unique_ptr<RecoveryExecutor> executor =
       o.recovery_executor ? o.recovery_executor(12, job)
                           : std::make_unique<InlineRecoveryExecutor>(12, job);
@@ -115,12 +117,14 @@ NavFilter::NavFilter(NavFilterOptions options, const RegistrationTable* registra
       altitude_m_(options_.default_altitude_m) {
   image_of_block_.push_back(-1);
   warm_.record_steps = jobs_.enabled();
+  recovery_.set_renewal_launcher(options_.renewal_launcher);
 }
 
 void NavFilter::restore_map(Esdf filter, CovarianceBounds bounds, StateRecovery recovery) {
   filter_ = std::move(filter);
   bounds_ = std::move(bounds);
   recovery_ = std::move(recovery);
+  recovery_.set_renewal_launcher(options_.renewal_launcher);
 }
 
 std::string NavFilter::index_error() const {

@@ -45,6 +45,8 @@ bool NavFilter::certify(const RecoveryResult& result) {
            " us skipped: " + s.to_string());
     }
   }
+  if (result.renewed_earlier) renew_from_earlier();
+  if (result.renewal_started) renewal_snapshot_ = bounds_.snapshot();
   std::function<OldStateEnergy()> old_states;  // K3 of the certificate, a solve: lazily
   if (bounds_.options().old_state_energy) old_states = [&] { return recovery_.old_state_energy(); };
   if (Status s = bounds_.set_recovery(recovery_.robot_covariance(), recovery_.column_residual(),
@@ -56,6 +58,17 @@ bool NavFilter::certify(const RecoveryResult& result) {
     return false;
   }
   return true;
+}
+
+void NavFilter::renew_from_earlier() {
+  const ExactMarginals* exact = recovery_.refreshed_marginals();
+  if (exact == nullptr) return;
+  if (Status s =
+          bounds_.refresh_exact(exact->marginals(), filter_.num_blocks(), &renewal_snapshot_);
+      !s.ok()) {
+    warn("NavFilter: renewal of the bounds from an earlier Λ at t = " + std::to_string(time_us_) +
+         " us skipped: " + s.to_string());
+  }
 }
 
 bool NavFilter::recover() {

@@ -177,10 +177,17 @@ RecoveryResult PoseGraphReplay::recover() {
     result = recovery_.solve(filter_.information(), filter_.information_vector());
   }
   if (!result.status.ok()) return result;
-  if (result.refreshed && recovery_.refreshed_marginals() != nullptr) {
-    result.status = bounds_.refresh_exact(*recovery_.refreshed_marginals(), filter_.num_blocks());
+  const ExactMarginals* exact = recovery_.refreshed_marginals();
+  if (result.refreshed && exact != nullptr) {
+    result.status = bounds_.refresh_exact(*exact, filter_.num_blocks());
     if (!result.status.ok()) return result;
   }
+  if (result.renewed_earlier && exact != nullptr) {  // of the Λ of renewal_snapshot_
+    result.status =
+        bounds_.refresh_exact(exact->marginals(), filter_.num_blocks(), &renewal_snapshot_);
+    if (!result.status.ok()) return result;
+  }
+  if (result.renewal_started) renewal_snapshot_ = bounds_.snapshot();
   std::function<OldStateEnergy()> old_states;  // K3 of the certificate, a solve: lazily
   if (bounds_.options().old_state_energy) old_states = [&] { return recovery_.old_state_energy(); };
   result.status = bounds_.set_recovery(recovery_.robot_covariance(), recovery_.column_residual(),

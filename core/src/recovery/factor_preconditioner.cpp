@@ -10,16 +10,22 @@ namespace nav::core {
 Status FactorPreconditioner::refresh(const Eigen::SparseMatrix<double>& lambda, int block_dim) {
   reset();
   try {
-    factor_ = std::make_unique<ExactMarginals>(ExactMarginals::compute(lambda, block_dim));
+    adopt(std::make_shared<const ExactMarginals>(ExactMarginals::compute(lambda, block_dim)));
   } catch (const std::exception& e) {
     reset();
     return Status::Error(StatusCode::kNotPositiveDefinite,
                          std::string("FactorPreconditioner::refresh: ") + e.what());
   }
-  block_dim_ = block_dim;
-  factored_dim_ = lambda.rows();
-  dim_ = factored_dim_;
   return Status::Ok();
+}
+
+void FactorPreconditioner::adopt(std::shared_ptr<const ExactMarginals> marginals) {
+  reset();
+  if (marginals == nullptr) return;
+  block_dim_ = marginals->block_dim();
+  factored_dim_ = Eigen::Index{marginals->num_blocks()} * block_dim_;
+  dim_ = factored_dim_;
+  factor_ = std::move(marginals);
 }
 
 void FactorPreconditioner::reset() {

@@ -80,6 +80,19 @@ Status StateRecoveryOptions::validate() const {
                          "StateRecoveryOptions.max_iterations must be >= 1, got " +
                              std::to_string(max_iterations));
   }
+  if (!(refresh_growth >= 0.0 && std::isfinite(refresh_growth))) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "StateRecoveryOptions.refresh_growth must be finite and >= 0, got " +
+                             std::to_string(refresh_growth));
+  }
+  const bool kept = preconditioner == RecoveryPreconditioner::kFactor && keep_factor_equal;
+  if (renewal_lag < 0 || (renewal_lag > 0 && !(kept && renewal_lag < refresh_interval))) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "StateRecoveryOptions.renewal_lag must be 0, or in [1, refresh_interval) "
+                         "with the kept factor; got " +
+                             std::to_string(renewal_lag) + " (refresh_interval " +
+                             std::to_string(refresh_interval) + ")");
+  }
   return Status::Ok();
 }
 
@@ -111,7 +124,9 @@ Status StateRecovery::initialize(const Eigen::VectorXd& x0, const Eigen::MatrixX
   solution_.rightCols(block_dim_) = 0.5 * (P0 + P0.transpose());
   factor_.reset();
   kept_.reset();
+  renewal_.drop();
   solves_since_refresh_ = 0;
+  previous_blocks_ = 0;
   last_column_residual_ = 0.0;
   return Status::Ok();
 }
@@ -275,12 +290,17 @@ RecoveryResult StateRecovery::solve_factor(const InformationMatrix& lambda,
   result.mode = options_.mode;
   const bool kept = options_.keep_factor_equal;
   const bool missed = !(last_column_residual_ <= options_.refresh_residual);
-  const bool refresh = !factor_.has_factor() || factor_.factored_dim() > lambda.dim() ||
-                       solves_since_refresh_ >= options_.refresh_interval || (missed && !kept);
+  const bool lagged = kept && options_.renewal_lag > 0;
+  const bool refresh = refresh_now(lambda, missed);
   if (refresh) {
     result.status = factor_.refresh(lambda.to_sparse(), block_dim_);
     if (!result.status.ok()) return result;
     solves_since_refresh_ = 0;
+  }
+  RecoveryResult renewal;  // the lagged renewal's flags
+  if (lagged) {
+    result.status = renew_lagged(lambda, renewal);
+    if (!result.status.ok()) return result;
   }
   result.status = kept ? update_kept(lambda, missed)
                        : factor_.update_trailing(lambda);
@@ -300,9 +320,44 @@ RecoveryResult StateRecovery::solve_factor(const InformationMatrix& lambda,
       kept ? u.rows_replaced + u.pivots_modified + u.rows_added + u.blocks_updated
            : static_cast<int>((lambda.dim() - factor_.factored_dim()) / block_dim_);
   result.refreshed = refresh;
+  result.renewed_earlier = renewal.renewed_earlier;
+  result.renewal_started = renewal.renewal_started;
   ++solves_since_refresh_;
+  previous_blocks_ = lambda.num_blocks();
   last_column_residual_ = result.column_relative_residual;
   return result;
+}
+
+bool StateRecovery::refresh_now(const InformationMatrix& lambda, bool missed) const {
+  const bool kept = options_.keep_factor_equal;
+  const bool lagged = kept && options_.renewal_lag > 0;
+  if (lagged && renewal_.in_flight()) return false;
+  const bool first = !factor_.has_factor() || factor_.factored_dim() > lambda.dim();
+  // The map's size crossed a power of 1 + refresh_growth since the previous solve: a schedule
+  // of the size alone, so that a restored filter (no factor, no counters) keeps it.
+  const auto level = [&](int blocks) {
+    return blocks < 1 ? -1 : std::floor(std::log(blocks) / std::log1p(options_.refresh_growth));
+  };
+  const bool grown =
+      options_.refresh_growth > 0.0 && level(lambda.num_blocks()) > level(previous_blocks_);
+  const bool interval = solves_since_refresh_ >= options_.refresh_interval;
+  return first || grown || (!lagged && (interval || (missed && !kept)));
+}
+
+Status StateRecovery::renew_lagged(const InformationMatrix& lambda, RecoveryResult& flags) {
+  if (renewal_.in_flight() && renewal_.age() >= options_.renewal_lag) {
+    std::shared_ptr<const ExactMarginals> marginals;
+    if (Status s = renewal_.take(&marginals); !s.ok()) return s;
+    factor_.adopt(std::move(marginals));
+    flags.renewed_earlier = true;
+  }
+  if (solves_since_refresh_ >= options_.refresh_interval && !renewal_.in_flight()) {
+    renewal_.start(lambda.to_sparse(), block_dim_);
+    flags.renewal_started = true;
+    solves_since_refresh_ = 0;
+  }
+  renewal_.count_solve();
+  return Status::Ok();
 }
 
 RecoveryResult StateRecovery::solve_packed(const InformationMatrix& lambda,

@@ -70,6 +70,8 @@ FilterConfig parse_filter(const YamlReader& f) {
                 "recovery_refresh_interval",
                 "recovery_refresh_residual",
                 "recovery_kept_recent_states",
+                "recovery_renewal_lag",
+                "recovery_refresh_growth",
                 "registration_wait_s",
                 "max_pending_registrations",
                 "proposal_min_probability",
@@ -113,6 +115,17 @@ FilterConfig parse_filter(const YamlReader& f) {
   f.read("recovery_refresh_interval", filter.recovery_refresh_interval, 1, 100000);
   f.read("recovery_refresh_residual", filter.recovery_refresh_residual, 1e-12, 1e12);
   f.read("recovery_kept_recent_states", filter.recovery_kept_recent_states, 0, 100000);
+  f.read("recovery_renewal_lag", filter.recovery_renewal_lag, 0, 99999);
+  f.read("recovery_refresh_growth", filter.recovery_refresh_growth, 0.0, 1e6);
+  if (filter.recovery_renewal_lag > 0 &&
+      !(filter.recovery_keep_factor_equal &&
+        filter.recovery_renewal_lag < filter.recovery_refresh_interval)) {
+    f.at("recovery_renewal_lag")
+        .fail(
+            "must be 0 unless recovery_preconditioner is kept_factor, and below "
+            "recovery_refresh_interval (" +
+            std::to_string(filter.recovery_refresh_interval) + ")");
+  }
   f.read("registration_wait_s", filter.registration_wait_s, 0.0, 3600.0);
   f.read("max_pending_registrations", filter.max_pending_registrations, 1, 100000);
   f.read("proposal_min_probability", filter.proposal_min_probability, 1e-9, 1.0 - 1e-9);

@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include "nav/core/navigation/chi_square.h"
+#include "nav/daemon/filter/marginals_launcher.h"
 #include "nav/daemon/filter/recovery_worker.h"
 
 namespace nav::daemon {
@@ -41,6 +42,9 @@ core::NavFilterOptions filter_options_from_config(const NavdConfig& config) {
   o.recovery.refresh_interval = config.filter.recovery_refresh_interval;
   o.recovery.refresh_residual = config.filter.recovery_refresh_residual;
   o.recovery.kept_factor_recent_blocks = config.filter.recovery_kept_recent_states;
+  o.recovery.renewal_lag = config.filter.recovery_renewal_lag;
+  o.recovery.refresh_growth = config.filter.recovery_refresh_growth;
+  if (o.recovery.renewal_lag > 0) o.renewal_launcher = threaded_marginals_launcher();
   o.camera_gate_chi2 =
       core::equivalent_chi_square_gate(config.filter.gating_chi2_threshold, 6, 5);
   o.aid_gate = config.filter.aid_gate;

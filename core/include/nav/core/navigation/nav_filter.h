@@ -153,7 +153,7 @@ class NavFilter {
   bool recover();
   void extend_warm_start();
   bool certify(const RecoveryResult& result);
-  void take_recovery_result(), submit_recovery_job();
+  void take_recovery_result(), submit_recovery_job(), renew_from_earlier();
   void propose_and_link(ImageRecord& current);
   LinkRecord try_link(const LinkHypothesis& h, const ImageRecord& current);
   /// Gates a registered pair (earlier block joint.state, later block `block_j`), applies it.
@@ -161,8 +161,7 @@ class NavFilter {
                     LinkRecord& link);
   void finish_pending(PendingRegistrations::Entry& pending, const RegistrationResult* reg);
   void warn(const std::string& message) const;
-  /// After reading a checkpoint: what names a block, image, link or sensor the filter does not
-  /// have ("" when every index is valid).
+  /// After reading a checkpoint: the block, image, link or sensor index it lacks ("": none).
   std::string index_error() const;
 
   NavFilterOptions options_;
@@ -172,6 +171,7 @@ class NavFilter {
   Esdf filter_{12};
   StateRecovery recovery_;  ///< with an executor: 0 iterations (certification only)
   CovarianceBounds bounds_;
+  BoundsSnapshot renewal_snapshot_;  ///< of the Λ of the lagged renewal in flight
   RecoverySchedule jobs_;
   LinkProposer proposer_;
   LinkGate gate_;

@@ -57,6 +57,9 @@ struct NavFilterOptions {
   /// Makes the executor of the recovery jobs (recovery_thread only; navd: a thread). Empty:
   /// InlineRecoveryExecutor, which runs each job at its hand-off (bit-identical outputs).
   RecoveryExecutorFactory recovery_executor;
+  /// Where the filter's renewals with recovery.renewal_lag > 0 run (lagged_renewal.h; navd: a
+  /// thread). Empty: on the filter thread when taken (the same outputs).
+  MarginalsLauncher renewal_launcher;
   /// How long after an image's receive time a proposed pair waits for its registration, s,
   /// [0, 3600]; 0: no waiting, the registration table is complete (pending_registrations.h).
   double registration_wait_s = 0.0;

@@ -121,6 +121,7 @@ class PoseGraphReplay {
   Esdf filter_;
   StateRecovery recovery_;
   CovarianceBounds bounds_;
+  BoundsSnapshot renewal_snapshot_;  // of the Λ of the lagged renewal in flight
   std::vector<VertexPlan> plan_;
   std::vector<int> block_of_vertex_;
   int next_ = 0;

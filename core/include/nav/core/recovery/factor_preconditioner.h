@@ -55,6 +55,8 @@ class FactorPreconditioner final : public Preconditioner {
   /// Factors Λ (and runs the selected inversion). kNotPositiveDefinite (the previous factor
   /// dropped) when CHOLMOD finds a non-positive pivot.
   Status refresh(const Eigen::SparseMatrix<double>& lambda, int block_dim);
+  /// Takes exact marginals computed elsewhere (lagged_renewal.h) as the factor of their Λ.
+  void adopt(std::shared_ptr<const ExactMarginals> marginals);
   /// Re-targets the preconditioner to the current Λ: factors Λ_TT (the robot and the states
   /// appended after block k, when the robot changed since the refresh). kInvalidArgument if there is no factor, the block size
   /// differs or Λ is smaller than the factor; kNotPositiveDefinite if Λ_TT is not SPD.
@@ -78,7 +80,7 @@ class FactorPreconditioner final : public Preconditioner {
              Eigen::Ref<Eigen::MatrixXd> Z) const override;
 
  private:
-  std::unique_ptr<ExactMarginals> factor_;
+  std::shared_ptr<const ExactMarginals> factor_;
   int block_dim_ = 0;
   Eigen::Index factored_dim_ = 0;
   Eigen::Index dim_ = 0;

@@ -62,6 +62,11 @@ struct StateRecoveryOptions {
   /// carries no factor and refactors at its first solve).
   int refresh_interval = 1;
   double refresh_residual = 1e-6;
+  /// kFactor: refactor also when Λ's number of blocks passes a power of 1 + refresh_growth (>= 0;
+  /// 0: off): refreshes early in a dive, where the map is small (the refresh cheap) and its
+  /// marginals shrink fastest, and every refresh_interval solves once it is large. A schedule
+  /// of the map's size alone, kept by a restored filter. Never lagged (renewal_lag).
+  double refresh_growth = 0.0;
   /// kFactor, kFixedIterations: at most this many iterations (>= 1) in a step that refactored:
   /// M = Λ, the first is the direct solve; later ones drift on rounding noise where the
   /// computed residual cannot see it (docs/consistency.md "Iterations after a refresh").
@@ -76,6 +81,11 @@ struct StateRecoveryOptions {
   /// The newest delayed states (>= 0) that each refactorisation orders after all older ones
   /// (kept_equal_factor.h; 0: plain AMD; docs/performance.md "The newest states ordered last").
   int kept_factor_recent_blocks = 16;
+  /// With keep_factor_equal: solves (>= 0, < refresh_interval) from the snapshot of a renewal
+  /// of the exact marginals to the solve that takes it (lagged_renewal.h), so that it can run
+  /// beside them; the states not tightened since then are reset to those marginals
+  /// (RecoveryResult::renewed_earlier). 0: computed and taken within the solve that renews.
+  int renewal_lag = 0;
   Status validate() const;
 };
 
@@ -95,6 +105,10 @@ struct RecoveryResult {
   int refactored_blocks = 0;  ///< preconditioner blocks re-inverted (packed: changed only)
   /// kFactor: this solve refactored Λ (StateRecovery::refreshed_marginals() are of this Λ).
   bool refreshed = false;
+  /// renewal_lag > 0: this solve took a renewal of the Λ of renewal_lag solves before
+  /// (refreshed_marginals(), of fewer blocks), and whether it started one of this Λ.
+  bool renewed_earlier = false;
+  bool renewal_started = false;
 };
 
 }  // namespace nav::core

@@ -32,11 +32,13 @@
 // Not thread-safe: owned by the recovery thread. No clocks (time it from the caller).
 
 #include <Eigen/Core>
+#include <utility>
 #include <vector>
 
 #include "nav/core/filter/information_matrix.h"
 #include "nav/core/recovery/factor_preconditioner.h"
 #include "nav/core/recovery/kept_equal_factor.h"
+#include "nav/core/recovery/lagged_renewal.h"
 #include "nav/core/recovery/packed_pcg.h"
 #include "nav/core/recovery/pcg.h"
 #include "nav/core/recovery/recovery_options.h"
@@ -88,6 +90,11 @@ class StateRecovery {
   const Eigen::MatrixXd& column_residual() const { return column_residual_; }
   /// kFactor: exact marginals of the last refresh's Λ (null before the first).
   const ExactMarginals* refreshed_marginals() const { return factor_.marginals(); }
+  /// Where the renewals of options().renewal_lag > 0 run (lagged_renewal.h; empty: on the
+  /// caller, when taken).
+  void set_renewal_launcher(MarginalsLauncher launcher) {
+    renewal_.set_launcher(std::move(launcher));
+  }
   /// kFactor: K3 of the certificate for column_residual() (certificate.h; old_end 0 otherwise).
   OldStateEnergy old_state_energy() const { return factor_.old_state_energy(column_residual_); }
 
@@ -108,6 +115,14 @@ class StateRecovery {
   RecoveryResult solve_factor(const InformationMatrix& lambda, const Eigen::VectorXd& eta);
   /// kFactor with keep_factor_equal: brings kept_ to Λ (refactoring when it must).
   Status update_kept(const InformationMatrix& lambda, bool refactor);
+  /// Whether this solve refactors Λ itself: the first solve, the map's size past a power of
+  /// 1 + refresh_growth,
+  /// and (without a renewal lag) refresh_interval solves or a missed residual (the factor
+  /// preconditioner). With a lag none while a renewal is in flight.
+  bool refresh_now(const InformationMatrix& lambda, bool missed) const;
+  /// renewal_lag > 0: takes the renewal in flight when it is renewal_lag solves old, starts one
+  /// of Λ after refresh_interval solves; sets flags.renewed_earlier and flags.renewal_started.
+  Status renew_lagged(const InformationMatrix& lambda, RecoveryResult& flags);
   RecoveryResult solve_packed(const InformationMatrix& lambda, const Eigen::VectorXd& eta);
   /// The PCG / refinement options of the mode; `iteration_cap` >= 0 lowers the fixed-iteration
   /// budget (kFixedIterations only).
@@ -134,7 +149,9 @@ class StateRecovery {
   Eigen::MatrixXd column_residual_;
   FactorPreconditioner factor_;
   KeptEqualFactor kept_;
+  LaggedRenewal renewal_;
   int solves_since_refresh_ = 0;
+  int previous_blocks_ = 0;  // Λ's blocks at the previous solve
   double last_column_residual_ = 0.0;
 };
 

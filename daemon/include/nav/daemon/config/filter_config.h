@@ -30,6 +30,13 @@ struct FilterConfig {
   /// kept_factor: the newest states ordered last at each refactorisation, [0, 100000]
   /// (core/recovery/kept_equal_factor.h; 0: plain AMD).
   int recovery_kept_recent_states = core::StateRecoveryOptions{}.kept_factor_recent_blocks;
+  /// kept_factor: images from the snapshot of a renewal of the exact marginals to its use, the
+  /// renewal computed on a thread meanwhile; [0, recovery_refresh_interval), 0: at its image
+  /// (core/recovery/lagged_renewal.h).
+  int recovery_renewal_lag = 0;
+  /// factor / kept_factor: refactor (renew) also when the map has grown by this fraction since
+  /// the last time, [0, 1e6]; 0: every recovery_refresh_interval images only.
+  double recovery_refresh_growth = 0.0;
   /// factor: refactor also after a solve that left a relative residual above this, [1e-12, 1e12]
   double recovery_refresh_residual = 1e-6;
   /// Data time from an image to the measurement at which the filter takes the recovery
