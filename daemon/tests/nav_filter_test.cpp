@@ -34,6 +34,7 @@ DiveRun run_dive(const nav::testing::SyntheticDiveOptions& dive_options, bool li
   config.filter.recovery_preconditioner = preconditioner;
   config.filter.recovery_keep_factor_equal = keep_factor_equal;
   config.filter.recovery_refresh_interval = keep_factor_equal ? 10 : 1;
+  config.filter.recovery_renewal_lag = 0;  // renewed at their image (lagged: its own test)
   DiveRun run;
   run.dive = nav::testing::make_synthetic_dive(config, dive_options);
   NavFilterOptions options = filter_options_from_config(config);

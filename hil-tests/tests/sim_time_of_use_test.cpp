@@ -1,7 +1,9 @@
 // The bounds at the time of use on a simulated dive: at EVERY image, right before its link
 // proposal, every stored bound and every proposal joint against the exact marginals of that
 // moment (core/recovery/time_of_use.h), with the factor kept equal to Λ and the exact marginals
-// renewed every 10 images (config/sim.yaml), on the filter thread and on the recovery thread.
+// renewed every 10 images, on the filter thread and on the recovery thread, and with
+// config/sim.yaml's renewals (as the number of states passes the powers of 1.25, then every 40
+// images, each of those taken 8 images later).
 //
 // What each check guards:
 //   * between renewals the exact marginals of the stored Λ drift up by the rounding of the
@@ -10,7 +12,9 @@
 //   * on the recovery thread the job's exact marginals refresh the bounds at its hand-off, and
 //     the job's iterate is extended to the current Λ by the robot steps recorded since the
 //     snapshot (warm_start_tracker.h replay_from): before both, the median log-det ratio of the
-//     default dive was 16 on the thread against 3e-5 on the filter thread.
+//     default dive was 16 on the thread against 3e-5 on the filter thread;
+//   * a renewal taken images after its snapshot (core/recovery/lagged_renewal.h) bounds the
+//     marginals then only when grown by the rounding of the predictions since.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -30,13 +34,15 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-core::TimeOfUseStats checked_dive(const std::string& name, bool recovery_thread) {
+/// `renewal_lag` < 0: config/sim.yaml's recovery as it is.
+core::TimeOfUseStats checked_dive(const std::string& name, bool recovery_thread,
+                                  int renewal_lag = 0) {
   const auto dir = scratch_dir(name);
   SimOptions so = sim_options(dir, 1, 60);  // config/sim.yaml's dive, shortened
   so.oracle.outlier_rate = 0.05;
   simulate_dive(so, sim_config_path().string());
   daemon::NavdConfig cfg = daemon::load_config_file((dir / "config.yaml").string());
-  use_kept_factor(cfg, 10);
+  if (renewal_lag >= 0) use_kept_factor(cfg, 10, renewal_lag);
   cfg.filter.recovery_thread = recovery_thread;
   daemon::ReplayOptions ro;
   ro.dead_reckoning = false;
@@ -70,5 +76,10 @@ TEST(SimTimeOfUse, KeptFactorOnTheRecoveryThreadIsAsTight) {
   expect_tight_and_conservative(checked_dive("recovery_thread", true));
 }
 
+// Renewed as the number of states passes the powers of 1.25 while the map is small, then every
+// 40 images, each of those taken 8 images later. Without the powers the median was 1.58 here.
+TEST(SimTimeOfUse, SimYamlRenewalsAreTightAndConservativeAtEveryImage) {
+  expect_tight_and_conservative(checked_dive("sim_yaml", false, -1));
+}
 }  // namespace
 }  // namespace nav::sim::test

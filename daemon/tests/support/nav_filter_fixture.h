@@ -28,6 +28,7 @@ using Bytes = std::vector<std::uint8_t>;
 inline void use_block_jacobi(daemon::NavdConfig& config) {
   config.filter.recovery_preconditioner = core::RecoveryPreconditioner::kBlockJacobi;
   config.filter.recovery_keep_factor_equal = false;
+  config.filter.recovery_renewal_lag = 0;  // a setting of the kept factor only
 }
 
 struct NavFilterFixture {

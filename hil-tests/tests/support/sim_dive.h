@@ -41,11 +41,12 @@ inline SimOptions sim_options(const std::filesystem::path& dir, std::uint64_t se
 }
 
 /// The recovery of config/sim.yaml: a factor kept equal to Λ, its exact marginals renewed every
-/// `refresh_interval` images.
-inline void use_kept_factor(daemon::NavdConfig& cfg, int refresh_interval) {
+/// `refresh_interval` images and taken `renewal_lag` images later.
+inline void use_kept_factor(daemon::NavdConfig& cfg, int refresh_interval, int renewal_lag = 0) {
   cfg.filter.recovery_preconditioner = core::RecoveryPreconditioner::kFactor;
   cfg.filter.recovery_keep_factor_equal = true;
   cfg.filter.recovery_refresh_interval = refresh_interval;
+  cfg.filter.recovery_renewal_lag = renewal_lag;
 }
 
 /// Removes /tmp/nav_sim_test_<pid> at the end of the test program.
