@@ -210,14 +210,20 @@ struct KeptReplay {
   int steps = 0, refreshes = 0;
 };
 
-/// Replays smallGrid3D with a kept-factor recovery and `refresh_residual`, checking that every
-/// step converged in one iteration to the rounding floor.
-KeptReplay replay_kept(const std::filesystem::path& path, double refresh_residual) {
+/// A pose-graph replay with the kept factor, exact marginals renewed every 10 steps.
+ReplayOptions kept_replay_options() {
   ReplayOptions options;
   options.recovery.preconditioner = RecoveryPreconditioner::kFactor;
   options.recovery.keep_factor_equal = true;
-  options.recovery.iterations_per_step = 5;
   options.recovery.refresh_interval = 10;
+  return options;
+}
+
+/// Replays smallGrid3D with a kept-factor recovery and `refresh_residual`, checking that every
+/// step converged in one iteration to the rounding floor.
+KeptReplay replay_kept(const std::filesystem::path& path, double refresh_residual) {
+  ReplayOptions options = kept_replay_options();
+  options.recovery.iterations_per_step = 5;
   options.recovery.kept_factor_spare_blocks = 16;
   options.recovery.refresh_residual = refresh_residual;
   const PoseGraph graph = read_g2o(path.string());  // the replay refers to it
@@ -258,10 +264,7 @@ TEST(KeptEqualFactor, RecoveryConvergesInOneIterationPerStepOnAReplayedPoseGraph
 // bounds conservative at the end.
 TEST(KeptEqualFactor, RenewalsFollowTheMapsGrowthThenTheIntervalWithTheirLag) {
   NAV_REQUIRE_DATA(path, "posegraphs/smallGrid3D.g2o");
-  ReplayOptions options;
-  options.recovery.preconditioner = RecoveryPreconditioner::kFactor;
-  options.recovery.keep_factor_equal = true;
-  options.recovery.refresh_interval = 10;
+  ReplayOptions options = kept_replay_options();
   options.recovery.refresh_growth = 0.5;
   options.recovery.renewal_lag = 3;
   const PoseGraph graph = read_g2o(path.string());
