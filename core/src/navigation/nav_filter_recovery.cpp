@@ -4,6 +4,7 @@
 #include <string>
 
 #include "nav/core/navigation/nav_filter.h"
+#include "nav/core/recovery/bounds_renewal.h"
 
 namespace nav::core {
 
@@ -38,15 +39,12 @@ bool NavFilter::certify(const RecoveryResult& result) {
   }
   // A refactorisation of this Λ gives its exact marginals: the bounds restart from them
   // (bounds.h "Exact refresh"), then the certificate of the recovered column (K1/K2).
-  if (result.refreshed && recovery_.refreshed_marginals() != nullptr) {
-    if (Status s = bounds_.refresh_exact(*recovery_.refreshed_marginals(), filter_.num_blocks());
-        !s.ok()) {
-      warn("NavFilter: exact refresh of the bounds at t = " + std::to_string(time_us_) +
-           " us skipped: " + s.to_string());
-    }
+  if (Status s = renew_bounds(result, recovery_.refreshed_marginals(), filter_.num_blocks(),
+                              bounds_, &renewal_snapshot_);
+      !s.ok()) {
+    warn("NavFilter: exact refresh of the bounds at t = " + std::to_string(time_us_) +
+         " us skipped: " + s.to_string());
   }
-  if (result.renewed_earlier) renew_from_earlier();
-  if (result.renewal_started) renewal_snapshot_ = bounds_.snapshot();
   std::function<OldStateEnergy()> old_states;  // K3 of the certificate, a solve: lazily
   if (bounds_.options().old_state_energy) old_states = [&] { return recovery_.old_state_energy(); };
   if (Status s = bounds_.set_recovery(recovery_.robot_covariance(), recovery_.column_residual(),
@@ -58,17 +56,6 @@ bool NavFilter::certify(const RecoveryResult& result) {
     return false;
   }
   return true;
-}
-
-void NavFilter::renew_from_earlier() {
-  const ExactMarginals* exact = recovery_.refreshed_marginals();
-  if (exact == nullptr) return;
-  if (Status s =
-          bounds_.refresh_exact(exact->marginals(), filter_.num_blocks(), &renewal_snapshot_);
-      !s.ok()) {
-    warn("NavFilter: renewal of the bounds from an earlier Λ at t = " + std::to_string(time_us_) +
-         " us skipped: " + s.to_string());
-  }
 }
 
 bool NavFilter::recover() {

@@ -3,7 +3,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -11,6 +10,7 @@
 
 #include "nav/core/geometry/pose.h"
 #include "nav/core/models/binary_models.h"
+#include "nav/core/recovery/bounds_renewal.h"
 #include "nav/core/recovery/consistency.h"
 #include "nav/core/recovery/markov_blanket.h"
 
@@ -177,17 +177,9 @@ RecoveryResult PoseGraphReplay::recover() {
     result = recovery_.solve(filter_.information(), filter_.information_vector());
   }
   if (!result.status.ok()) return result;
-  const ExactMarginals* exact = recovery_.refreshed_marginals();
-  if (result.refreshed && exact != nullptr) {
-    result.status = bounds_.refresh_exact(*exact, filter_.num_blocks());
-    if (!result.status.ok()) return result;
-  }
-  if (result.renewed_earlier && exact != nullptr) {  // of the Λ of renewal_snapshot_
-    result.status =
-        bounds_.refresh_exact(exact->marginals(), filter_.num_blocks(), &renewal_snapshot_);
-    if (!result.status.ok()) return result;
-  }
-  if (result.renewal_started) renewal_snapshot_ = bounds_.snapshot();
+  result.status = renew_bounds(result, recovery_.refreshed_marginals(), filter_.num_blocks(),
+                               bounds_, &renewal_snapshot_);
+  if (!result.status.ok()) return result;
   std::function<OldStateEnergy()> old_states;  // K3 of the certificate, a solve: lazily
   if (bounds_.options().old_state_energy) old_states = [&] { return recovery_.old_state_energy(); };
   result.status = bounds_.set_recovery(recovery_.robot_covariance(), recovery_.column_residual(),

@@ -290,7 +290,6 @@ RecoveryResult StateRecovery::solve_factor(const InformationMatrix& lambda,
   result.mode = options_.mode;
   const bool kept = options_.keep_factor_equal;
   const bool missed = !(last_column_residual_ <= options_.refresh_residual);
-  const bool lagged = kept && options_.renewal_lag > 0;
   const bool refresh = refresh_now(lambda, missed);
   if (refresh) {
     result.status = factor_.refresh(lambda.to_sparse(), block_dim_);
@@ -298,7 +297,7 @@ RecoveryResult StateRecovery::solve_factor(const InformationMatrix& lambda,
     solves_since_refresh_ = 0;
   }
   RecoveryResult renewal;  // the lagged renewal's flags
-  if (lagged) {
+  if (lagged()) {
     result.status = renew_lagged(lambda, renewal);
     if (!result.status.ok()) return result;
   }
@@ -330,8 +329,7 @@ RecoveryResult StateRecovery::solve_factor(const InformationMatrix& lambda,
 
 bool StateRecovery::refresh_now(const InformationMatrix& lambda, bool missed) const {
   const bool kept = options_.keep_factor_equal;
-  const bool lagged = kept && options_.renewal_lag > 0;
-  if (lagged && renewal_.in_flight()) return false;
+  if (lagged() && renewal_.in_flight()) return false;
   const bool first = !factor_.has_factor() || factor_.factored_dim() > lambda.dim();
   // The map's size crossed a power of 1 + refresh_growth since the previous solve: a schedule
   // of the size alone, so that a restored filter (no factor, no counters) keeps it.
@@ -341,7 +339,7 @@ bool StateRecovery::refresh_now(const InformationMatrix& lambda, bool missed) co
   const bool grown =
       options_.refresh_growth > 0.0 && level(lambda.num_blocks()) > level(previous_blocks_);
   const bool interval = solves_since_refresh_ >= options_.refresh_interval;
-  return first || grown || (!lagged && (interval || (missed && !kept)));
+  return first || grown || (!lagged() && (interval || (missed && !kept)));
 }
 
 Status StateRecovery::renew_lagged(const InformationMatrix& lambda, RecoveryResult& flags) {

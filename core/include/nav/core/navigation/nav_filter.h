@@ -153,7 +153,7 @@ class NavFilter {
   bool recover();
   void extend_warm_start();
   bool certify(const RecoveryResult& result);
-  void take_recovery_result(), submit_recovery_job(), renew_from_earlier();
+  void take_recovery_result(), submit_recovery_job();
   void propose_and_link(ImageRecord& current);
   LinkRecord try_link(const LinkHypothesis& h, const ImageRecord& current);
   /// Gates a registered pair (earlier block joint.state, later block `block_j`), applies it.

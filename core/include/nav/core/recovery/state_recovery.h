@@ -116,10 +116,10 @@ class StateRecovery {
   /// kFactor with keep_factor_equal: brings kept_ to Λ (refactoring when it must).
   Status update_kept(const InformationMatrix& lambda, bool refactor);
   /// Whether this solve refactors Λ itself: the first solve, the map's size past a power of
-  /// 1 + refresh_growth,
-  /// and (without a renewal lag) refresh_interval solves or a missed residual (the factor
-  /// preconditioner). With a lag none while a renewal is in flight.
+  /// 1 + refresh_growth, and (without a renewal lag) refresh_interval solves or a missed residual
+  /// (the factor preconditioner). With a lag none while a renewal is in flight.
   bool refresh_now(const InformationMatrix& lambda, bool missed) const;
+  bool lagged() const { return options_.keep_factor_equal && options_.renewal_lag > 0; }
   /// renewal_lag > 0: takes the renewal in flight when it is renewal_lag solves old, starts one
   /// of Λ after refresh_interval solves; sets flags.renewed_earlier and flags.renewal_started.
   Status renew_lagged(const InformationMatrix& lambda, RecoveryResult& flags);
