@@ -3,8 +3,9 @@
 // states, a link to the robot) the modified factor's solve matches a dense solve of the filter's
 // Λ, and so do its direct solve of the robot's covariance column and that solve together with a
 // refinement step; running out of reserved slots,
-// a lost block and a copy are reported, not mis-solved; and a recovery in the kept-equal mode
-// converges in one iteration per step on a replayed pose graph.
+// a lost block and a copy are reported, not mis-solved; a recovery in the kept-equal mode
+// converges in one iteration per step on a replayed pose graph, its mean solving only the
+// changed blocks; and its renewals follow their schedule.
 #include "nav/core/recovery/kept_equal_factor.h"
 
 #include <gtest/gtest.h>
@@ -256,6 +257,36 @@ TEST(KeptEqualFactor, RecoveryConvergesInOneIterationPerStepOnAReplayedPoseGraph
   // rebuilt at every step; the bounds' refreshes still follow the interval alone.
   const KeptReplay refined = replay_kept(path, 1e-300);
   EXPECT_EQ(refined.refreshes, (refined.steps + 9) / 10);
+}
+
+// The step of μ solves only the blocks of η − Λμ that changed since the previous step
+// (StateRecovery::keep_changed_blocks): most steps are such, and the mean still matches, after
+// every step, that of the same replay recovered by CHOLMOD's direct solve.
+TEST(KeptEqualFactor, MeanStepsOfTheChangedBlocksMatchDirectSolves) {
+  NAV_REQUIRE_DATA(path, "posegraphs/smallGrid3D.g2o");
+  ReplayOptions options = kept_replay_options();
+  options.recovery.kept_factor_spare_blocks = 16;
+  ReplayOptions direct_options;
+  direct_options.recovery.mode = RecoveryMode::kDirect;
+  const PoseGraph graph = read_g2o(path.string());
+  PoseGraphReplay replay(graph, options), direct(graph, direct_options);
+  ASSERT_TRUE(replay.start().ok());
+  ASSERT_TRUE(direct.start().ok());
+  int steps = 0, partial = 0;
+  while (!replay.done()) {
+    RecoveryResult r, reference;
+    ASSERT_TRUE(replay.step(&r).ok()) << r.status.to_string();
+    ASSERT_TRUE(direct.step(&reference).ok()) << reference.status.to_string();
+    const int blocks = replay.filter().num_blocks();
+    EXPECT_GT(r.mean_step_blocks, 0) << "step " << steps;
+    EXPECT_LE(r.mean_step_blocks, blocks) << "step " << steps;
+    partial += r.mean_step_blocks < blocks ? 1 : 0;
+    const Eigen::VectorXd expected = direct.recovery().mean();
+    EXPECT_LT((replay.recovery().mean() - expected).norm(), 1e-9 * expected.norm())
+        << "step " << steps << ", " << r.mean_step_blocks << " of " << blocks << " blocks";
+    ++steps;
+  }
+  EXPECT_GT(partial, steps / 2) << steps << " steps";
 }
 
 // The renewal schedule of the kept factor (recovery_options.h refresh_growth, renewal_lag): a

@@ -63,6 +63,7 @@ template <int C>
 NAV_LDL_KERNEL void forward_one(const SimplicialLdl& L, double* y) {
   for (int j = 0; j < L.n; ++j) {
     const double yj = y[j];
+    if (yj == 0.0) continue;  // a sparse r: only the columns of its reach are read
     const int end = L.p[j] + L.nz[j];
     for (int k = L.p[j] + 1; k < end; ++k) y[L.row[k]] -= L.value[k] * yj;
     y[j] = yj / L.value[L.p[j]];

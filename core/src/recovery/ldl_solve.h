@@ -26,6 +26,9 @@ int ldl_width(int columns);
 
 /// Y ← D⁻¹ L⁻¹ Y in place in the first `columns` columns (rounded up to a multiple of 4 when
 /// width > 1; the others are left as they are), Y of L.n rows of `width` (ldl_width) doubles.
+/// With width 1 a column of L is skipped when its entry of Y is zero as it is reached: a sparse
+/// Y reads only its reach, the union of its nonzeros' paths up the elimination tree (Gilbert and
+/// Peierls; Davis 2006, sec. 3.2).
 void ldl_forward_diagonal(const SimplicialLdl& L, double* Y, int width, int columns);
 
 /// Y ← L⁻ᵀ Y in place (the backward pass), Y as above.

@@ -128,6 +128,7 @@ Status StateRecovery::initialize(const Eigen::VectorXd& x0, const Eigen::MatrixX
   solves_since_refresh_ = 0;
   previous_blocks_ = 0;
   last_column_residual_ = 0.0;
+  mean_left_max_ = -1.0;
   return Status::Ok();
 }
 
@@ -139,6 +140,7 @@ Status StateRecovery::set_solution(const Eigen::MatrixXd& X) {
                              std::to_string(block_dim_) + ", got " + shape(X));
   }
   solution_ = X;
+  mean_left_max_ = -1.0;
   return Status::Ok();
 }
 

@@ -30,7 +30,9 @@ PcgSummary StateRecovery::kept_step(const SpdOperator& A, const PcgOptions& pcg)
   }
   Eigen::MatrixXd& step = workspace_.Z;
   step.resize(n, 1 + d);
-  kept_.solve_with_robot_columns(r0, step);  // [Λ⁻¹ r₀ | Λ⁻¹ E_r]
+  Eigen::VectorXd changed = r0;
+  const int solved = keep_changed_blocks(changed);
+  kept_.solve_with_robot_columns(changed, step);  // [Λ⁻¹ r₀' | Λ⁻¹ E_r]
   mean += step.col(0);
   solution_.rightCols(d) = step.rightCols(d);
   A.multiply(solution_, product);  // both residuals by one product
@@ -42,6 +44,8 @@ PcgSummary StateRecovery::kept_step(const SpdOperator& A, const PcgOptions& pcg)
     mean -= z;
     residual.col(0) = r0;
   }
+  note_mean_residual(residual.col(0), solved == num_blocks());
+  mean_step_blocks_ = solved;
   column_residual_ = residual.rightCols(d);
   summary.iterations = 1;
   summary.residual_norm = Eigen::VectorXd::Constant(1, residual.col(0).norm());
@@ -49,6 +53,7 @@ PcgSummary StateRecovery::kept_step(const SpdOperator& A, const PcgOptions& pcg)
   const bool done = !(summary.residual_norm[0] < 0.5 * r0.norm()) ||
                     meets_tolerance(pcg, summary.residual_norm[0], eta.norm());
   if (pcg.max_iterations <= 1 || done) return summary;
+  mean_left_max_ = -1.0;  // the next step solves all of r₀
   PcgOptions rest = pcg;
   rest.max_iterations -= 1;
   PcgSummary more =
@@ -56,6 +61,29 @@ PcgSummary StateRecovery::kept_step(const SpdOperator& A, const PcgOptions& pcg)
   more.iterations += 1;
   more.restarted_columns += summary.restarted_columns;
   return more;
+}
+
+int StateRecovery::keep_changed_blocks(Eigen::VectorXd& r0) const {
+  const int blocks = num_blocks();
+  if (!(mean_left_max_ >= 0.0) || !(mean_left_max_ <= kMeanRoundingGrowth * mean_full_max_)) {
+    return blocks;
+  }
+  int kept = 0;
+  for (int b = 0; b < blocks; ++b) {
+    auto block = r0.segment(Eigen::Index{b} * block_dim_, block_dim_);
+    if (block.lpNorm<Eigen::Infinity>() > mean_left_max_) {
+      ++kept;
+    } else {
+      block.setZero();
+    }
+  }
+  return kept;
+}
+
+void StateRecovery::note_mean_residual(const Eigen::Ref<const Eigen::VectorXd>& residual,
+                                       bool full) {
+  mean_left_max_ = residual.lpNorm<Eigen::Infinity>();
+  if (full) mean_full_max_ = mean_left_max_;
 }
 
 RecoveryResult StateRecovery::solve_kept(const SpdOperator& A, const Eigen::VectorXd& eta) {
@@ -73,6 +101,7 @@ RecoveryResult StateRecovery::solve_kept(const SpdOperator& A, const Eigen::Vect
           : solve_refinement(A, kept_, rhs_.leftCols(1), solution_.leftCols(1), pcg, workspace_);
   result.status = mean.status;
   result.iterations = mean.iterations;
+  result.mean_step_blocks = pcg.max_iterations > 0 ? mean_step_blocks_ : 0;
   if (!result.status.ok()) return result;
   if (pcg.max_iterations == 0) {
     column_residual_.resize(solution_.rows(), d);

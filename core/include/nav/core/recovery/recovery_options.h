@@ -109,6 +109,9 @@ struct RecoveryResult {
   /// (refreshed_marginals(), of fewer blocks), and whether it started one of this Λ.
   bool renewed_earlier = false;
   bool renewal_started = false;
+  /// Kept factor: the blocks of η − Λμ its step of μ solved (the others held only the previous
+  /// step's rounding: StateRecovery::keep_changed_blocks); 0 in the other modes.
+  int mean_step_blocks = 0;
 };
 
 }  // namespace nav::core

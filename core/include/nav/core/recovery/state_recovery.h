@@ -112,6 +112,15 @@ class StateRecovery {
   /// later steps of μ by solve_refinement while each halves its residual. Sets
   /// column_residual_. pcg.max_iterations >= 1.
   PcgSummary kept_step(const SpdOperator& A, const PcgOptions& pcg);
+  /// The step of μ solves only the blocks of r₀ = η − Λμ that changed since the previous step:
+  /// those with an entry above the largest the previous step left (the others hold that step's
+  /// rounding), so that the forward pass reads only their reach in the factor. Zeroes the others
+  /// and returns the count kept; all blocks after a step that left more than
+  /// kMeanRoundingGrowth times the residual of the last step of all blocks (what the skipped
+  /// blocks carried grows by each step's rounding), and when no step went before.
+  int keep_changed_blocks(Eigen::VectorXd& r0) const;
+  void note_mean_residual(const Eigen::Ref<const Eigen::VectorXd>& residual, bool full);
+  static constexpr double kMeanRoundingGrowth = 4.0;
   RecoveryResult solve_factor(const InformationMatrix& lambda, const Eigen::VectorXd& eta);
   /// kFactor with keep_factor_equal: brings kept_ to Λ (refactoring when it must).
   Status update_kept(const InformationMatrix& lambda, bool refactor);
@@ -153,6 +162,10 @@ class StateRecovery {
   int solves_since_refresh_ = 0;
   int previous_blocks_ = 0;  // Λ's blocks at the previous solve
   double last_column_residual_ = 0.0;
+  // keep_changed_blocks: the largest |entry| of η − Λμ the last step of μ left (< 0: unknown),
+  // and that of the last step that solved all blocks; the blocks the last step solved.
+  double mean_left_max_ = -1.0, mean_full_max_ = 0.0;
+  int mean_step_blocks_ = 0;
 };
 
 }  // namespace nav::core
