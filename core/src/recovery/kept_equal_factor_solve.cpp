@@ -36,7 +36,8 @@ void KeptEqualFactor::apply(const Eigen::Ref<const Eigen::MatrixXd>& R,
   rows_.assign(static_cast<size_t>(L.n) * static_cast<size_t>(width), 0.0);
   scatter_slots(R, rows_.data(), width);
   detail::ldl_forward_diagonal(L, rows_.data(), width, static_cast<int>(R.cols()));
-  detail::ldl_backward(L, rows_.data(), width);
+  last_solve_supernodes_ =
+      detail::ldl_backward_blocks(L, factored_.block_dim(), rows_.data(), width);
   gather_slots(Z, width);
 }
 
@@ -86,7 +87,8 @@ void KeptEqualFactor::robot_columns_backward(int width, int offset) const {
     double* y = rows_.data() + static_cast<std::ptrdiff_t>(first + i) * width + offset;
     for (int c = 0; c < d; ++c) y[c] = inverse(i, c);
   }
-  detail::ldl_backward(L, rows_.data(), width);  // Lᵀ X = ·, one pass over the factor
+  // Lᵀ X = ·, one pass over the factor
+  last_solve_supernodes_ = detail::ldl_backward_blocks(L, d, rows_.data(), width);
 }
 
 }  // namespace nav::core

@@ -34,4 +34,13 @@ void ldl_forward_diagonal(const SimplicialLdl& L, double* Y, int width, int colu
 /// Y ← L⁻ᵀ Y in place (the backward pass), Y as above.
 void ldl_backward(const SimplicialLdl& L, double* Y, int width);
 
+/// ldl_backward for a factor of d x d blocks (d <= 12, L.n a multiple of d): a block whose
+/// columns share their rows below it (a supernode, what the factor of a block matrix holds
+/// unless a modification gave one column a pattern of its own) is solved as one: each row
+/// below it is gathered once per 3 of its columns instead of once per column (the supernodal
+/// solve of Ng and Peyton, SIAM J. Sci. Comput. 14(5), 1993, on the blocks the simplicial
+/// factor keeps: its row modifications need the simplicial form). Returns the
+/// number of blocks so solved; the others (and any d that does not apply) column by column.
+int ldl_backward_blocks(const SimplicialLdl& L, int block_dim, double* Y, int width);
+
 }  // namespace nav::core::detail

@@ -99,6 +99,8 @@ class KeptEqualFactor final : public Preconditioner {
   /// The slot (block position in the factor) of `block`, 0 <= block < factored_blocks().
   int slot(int block) const { return slot_[static_cast<size_t>(block)]; }
   const KeptFactorUpdate& last_update() const { return last_update_; }
+  /// Blocks the last solve's backward pass took as supernodes (ldl_solve.h), for the tests.
+  int last_solve_supernodes() const { return last_solve_supernodes_; }
   /// Nonzeros of L (fill), for the benchmarks.
   double factor_nnz() const;
 
@@ -143,6 +145,7 @@ class KeptEqualFactor final : public Preconditioner {
   KeptFactorUpdate last_update_;
   mutable std::vector<double> rows_;     // right-hand sides by rows, in slot space
   mutable std::vector<double> forward_;  // one right-hand side, in slot space
+  mutable int last_solve_supernodes_ = 0;
 };
 
 }  // namespace nav::core
