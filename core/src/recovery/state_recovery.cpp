@@ -109,6 +109,7 @@ StateRecovery::StateRecovery(int block_dim, StateRecoveryOptions options)
 Status StateRecovery::set_options(const StateRecoveryOptions& options) {
   if (Status s = options.validate(); !s.ok()) return s;
   options_ = options;
+  mean_product_.invalidate();
   return Status::Ok();
 }
 
@@ -129,6 +130,7 @@ Status StateRecovery::initialize(const Eigen::VectorXd& x0, const Eigen::MatrixX
   previous_blocks_ = 0;
   last_column_residual_ = 0.0;
   mean_left_max_ = -1.0;
+  mean_product_.invalidate();
   return Status::Ok();
 }
 
@@ -141,6 +143,7 @@ Status StateRecovery::set_solution(const Eigen::MatrixXd& X) {
   }
   solution_ = X;
   mean_left_max_ = -1.0;
+  mean_product_.invalidate();
   return Status::Ok();
 }
 
@@ -190,6 +193,8 @@ Status StateRecovery::extend_for_prediction(const Eigen::MatrixXd& F, const Eige
   const Eigen::MatrixXd sigma_rr = F * sigma_tt * F.transpose() + Q;
   column.topRows(d) = 0.5 * (sigma_rr + sigma_rr.transpose());
   solution_.block(0, 0, d, 1) = robot_mean;
+  mean_product_.moved(0);
+  if (keep_current) mean_product_.moved(kept_block);
   return Status::Ok();
 }
 
@@ -308,7 +313,7 @@ RecoveryResult StateRecovery::solve_factor(const InformationMatrix& lambda,
   if (!result.status.ok()) return result;
   const int cap = refresh ? options_.iterations_after_refresh : -1;
   const auto solve = [&](const SpdOperator& A) {
-    return kept ? solve_kept(A, eta) : solve_with(A, factor_, eta, cap);
+    return kept ? solve_kept(A, eta, lambda) : solve_with(A, factor_, eta, cap);
   };
   if (options_.kernel == RecoveryKernel::kPacked) {
     packed_operator_.refresh(lambda);
@@ -427,6 +432,7 @@ RecoveryResult StateRecovery::solve_direct(const Eigen::SparseMatrix<double>& la
 }
 
 RecoveryResult StateRecovery::solve(const CsrMatrix& lambda, const Eigen::VectorXd& eta) {
+  ++solve_stamp_;
   RecoveryResult result;
   result.mode = options_.mode;
   result.status = check_snapshot(lambda.rows(), eta.size());
@@ -441,6 +447,7 @@ RecoveryResult StateRecovery::solve(const CsrMatrix& lambda, const Eigen::Vector
 }
 
 RecoveryResult StateRecovery::solve(const InformationMatrix& lambda, const Eigen::VectorXd& eta) {
+  ++solve_stamp_;
   RecoveryResult result;
   result.mode = options_.mode;
   if (lambda.block_dim() != block_dim_) {

@@ -13,7 +13,8 @@ Status StateRecovery::update_kept(const InformationMatrix& lambda, bool refactor
   return s.ok() ? s : kept_.factor(lambda, spare, recent);
 }
 
-PcgSummary StateRecovery::kept_step(const SpdOperator& A, const PcgOptions& pcg) {
+PcgSummary StateRecovery::kept_step(const SpdOperator& A, const PcgOptions& pcg,
+                                    const InformationMatrix& lambda) {
   const Eigen::Index n = solution_.rows();
   const int d = block_dim_;
   PcgSummary summary;
@@ -22,7 +23,9 @@ PcgSummary StateRecovery::kept_step(const SpdOperator& A, const PcgOptions& pcg)
   Eigen::MatrixXd& product = workspace_.Q;
   product.resize(n, 1 + d);
   // r₀ = η − Λ μ₀, from μ₀ = 0 when the warm start is further from μ than zero (pcg.h).
-  A.multiply(mean, product.leftCols(1));
+  mean_product_rows_ = mean_product_.update(lambda, kept_.rows_changed_by_last_update(), mean,
+                                            solve_stamp_, product.col(0));
+  if (mean_product_rows_ < 0) A.multiply(mean, product.leftCols(1));
   Eigen::VectorXd r0 = eta - product.col(0);
   if (pcg.restart_worse_than_zero) {
     summary.restarted_columns =
@@ -43,6 +46,8 @@ PcgSummary StateRecovery::kept_step(const SpdOperator& A, const PcgOptions& pcg)
   if (refinement_step_raised_error(z, r0, residual.col(0))) {
     mean -= z;
     residual.col(0) = r0;
+  } else {
+    mean_product_.set(product.col(0), solve_stamp_);  // Λμ of the mean this step leaves
   }
   note_mean_residual(residual.col(0), solved == num_blocks());
   mean_step_blocks_ = solved;
@@ -54,6 +59,7 @@ PcgSummary StateRecovery::kept_step(const SpdOperator& A, const PcgOptions& pcg)
                     meets_tolerance(pcg, summary.residual_norm[0], eta.norm());
   if (pcg.max_iterations <= 1 || done) return summary;
   mean_left_max_ = -1.0;  // the next step solves all of r₀
+  mean_product_.invalidate();  // the further steps move μ
   PcgOptions rest = pcg;
   rest.max_iterations -= 1;
   PcgSummary more =
@@ -86,7 +92,8 @@ void StateRecovery::note_mean_residual(const Eigen::Ref<const Eigen::VectorXd>& 
   if (full) mean_full_max_ = mean_left_max_;
 }
 
-RecoveryResult StateRecovery::solve_kept(const SpdOperator& A, const Eigen::VectorXd& eta) {
+RecoveryResult StateRecovery::solve_kept(const SpdOperator& A, const Eigen::VectorXd& eta,
+                                         const InformationMatrix& lambda) {
   RecoveryResult result;
   result.mode = options_.mode;
   fill_rhs(eta);
@@ -97,11 +104,12 @@ RecoveryResult StateRecovery::solve_kept(const SpdOperator& A, const Eigen::Vect
   // No iterations: only the residuals of the warm start (the recovery thread's certificate).
   const PcgSummary mean =
       pcg.max_iterations > 0
-          ? kept_step(A, pcg)
+          ? kept_step(A, pcg, lambda)
           : solve_refinement(A, kept_, rhs_.leftCols(1), solution_.leftCols(1), pcg, workspace_);
   result.status = mean.status;
   result.iterations = mean.iterations;
   result.mean_step_blocks = pcg.max_iterations > 0 ? mean_step_blocks_ : 0;
+  result.mean_product_rows = pcg.max_iterations > 0 ? mean_product_rows_ : -1;
   if (!result.status.ok()) return result;
   if (pcg.max_iterations == 0) {
     column_residual_.resize(solution_.rows(), d);

@@ -99,6 +99,12 @@ class KeptEqualFactor final : public Preconditioner {
   /// The slot (block position in the factor) of `block`, 0 <= block < factored_blocks().
   int slot(int block) const { return slot_[static_cast<size_t>(block)]; }
   const KeptFactorUpdate& last_update() const { return last_update_; }
+  /// The blocks whose rows of Λ the last update() found changed (the robot and its neighbours,
+  /// the appended states, the blocks of a rank update); nullptr after factor(), reset() or a
+  /// failed update (unknown). Under the premise of the file comment.
+  const std::vector<int>* rows_changed_by_last_update() const {
+    return changed_rows_known_ ? &changed_rows_ : nullptr;
+  }
   /// Blocks the last solve's backward pass took as supernodes (ldl_solve.h), for the tests.
   int last_solve_supernodes() const { return last_solve_supernodes_; }
   /// Nonzeros of L (fill), for the benchmarks.
@@ -146,6 +152,8 @@ class KeptEqualFactor final : public Preconditioner {
   mutable std::vector<double> rows_;     // right-hand sides by rows, in slot space
   mutable std::vector<double> forward_;  // one right-hand side, in slot space
   mutable int last_solve_supernodes_ = 0;
+  std::vector<int> changed_rows_;  // rows_changed_by_last_update()
+  bool changed_rows_known_ = false;
 };
 
 }  // namespace nav::core

@@ -112,6 +112,9 @@ struct RecoveryResult {
   /// Kept factor: the blocks of η − Λμ its step of μ solved (the others held only the previous
   /// step's rounding: StateRecovery::keep_changed_blocks); 0 in the other modes.
   int mean_step_blocks = 0;
+  /// Kept factor: the block rows of Λμ recomputed for r₀, the others kept from the previous
+  /// step's product (mean_product.h); −1 when the whole product was due, or another mode.
+  int mean_product_rows = -1;
 };
 
 }  // namespace nav::core

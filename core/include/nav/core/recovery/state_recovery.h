@@ -39,6 +39,7 @@
 #include "nav/core/recovery/factor_preconditioner.h"
 #include "nav/core/recovery/kept_equal_factor.h"
 #include "nav/core/recovery/lagged_renewal.h"
+#include "nav/core/recovery/mean_product.h"
 #include "nav/core/recovery/packed_pcg.h"
 #include "nav/core/recovery/pcg.h"
 #include "nav/core/recovery/recovery_options.h"
@@ -106,12 +107,15 @@ class StateRecovery {
   /// at iterations_after_refresh; Σ_{*r} solved directly and refined too when its relative
   /// residual exceeds relative_tolerance (kTolerance) or refresh_residual (kFixedIterations).
   /// The residuals are the true ones.
-  RecoveryResult solve_kept(const SpdOperator& A, const Eigen::VectorXd& eta);
+  RecoveryResult solve_kept(const SpdOperator& A, const Eigen::VectorXd& eta,
+                            const InformationMatrix& lambda);
   /// solve_kept's first step of μ and the direct Σ_{*r} with one backward pass over the factor
   /// and one product with Λ for both residuals (KeptEqualFactor::solve_with_robot_columns);
   /// later steps of μ by solve_refinement while each halves its residual. Sets
-  /// column_residual_. pcg.max_iterations >= 1.
-  PcgSummary kept_step(const SpdOperator& A, const PcgOptions& pcg);
+  /// column_residual_. pcg.max_iterations >= 1. Λμ₀ for r₀ from the previous step's product
+  /// where Λ and μ did not change (mean_product.h).
+  PcgSummary kept_step(const SpdOperator& A, const PcgOptions& pcg,
+                       const InformationMatrix& lambda);
   /// The step of μ solves only the blocks of r₀ = η − Λμ that changed since the previous step:
   /// those with an entry above the largest the previous step left (the others hold that step's
   /// rounding), so that the forward pass reads only their reach in the factor. Zeroes the others
@@ -166,6 +170,9 @@ class StateRecovery {
   // and that of the last step that solved all blocks; the blocks the last step solved.
   double mean_left_max_ = -1.0, mean_full_max_ = 0.0;
   int mean_step_blocks_ = 0;
+  MeanProduct mean_product_;  // Λμ of the last kept step, stamped with solve_stamp_
+  long solve_stamp_ = 0;      // solves so far
+  int mean_product_rows_ = -1;
 };
 
 }  // namespace nav::core
