@@ -204,5 +204,30 @@ TEST(Certificate, KappaSquaredSplitIsTheOptimumOverOmega) {
   EXPECT_EQ(kappa_squared_split(0.0, 0.0), 0.0);
 }
 
+// K2's sum against the dense product Rᵀ blkdiag(W, B_11, …) R restricted to the block rows it
+// names.
+TEST(Certificate, WeightedBlockGramIsTheDenseBlockDiagonalProduct) {
+  std::mt19937 rng(8);
+  for (const int d : {5, 6, 12}) {
+    const int blocks = 9;
+    const Eigen::MatrixXd R = random_matrix(blocks * d, d, rng);
+    std::vector<Eigen::MatrixXd> B;
+    for (int j = 0; j < blocks; ++j) {
+      const Eigen::MatrixXd A = random_matrix(d, d, rng);
+      B.push_back(A * A.transpose());
+    }
+    const auto bound = [&](int j) -> const Eigen::MatrixXd& { return B[static_cast<size_t>(j)]; };
+    for (const auto& [first, last] : {std::pair{0, blocks}, {4, blocks}, {0, 1}}) {
+      Eigen::MatrixXd D = Eigen::MatrixXd::Zero(blocks * d, blocks * d);
+      D.topLeftCorner(d, d) = B[0];  // W: the robot's block, always in
+      for (int j = std::max(first, 1); j < last; ++j) D.block(j * d, j * d, d, d) = B[j];
+      const Eigen::MatrixXd expected = R.transpose() * D * R;
+      const Eigen::MatrixXd gram = weighted_block_gram(R, first, last, B[0], bound);
+      EXPECT_LT((gram - expected).norm(), 1e-12 * expected.norm())
+          << "d " << d << ", blocks [" << first << ", " << last << ")";
+    }
+  }
+}
+
 }  // namespace
 }  // namespace nav::core

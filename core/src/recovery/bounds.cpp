@@ -231,13 +231,9 @@ Status CovarianceBounds::set_recovery(const Eigen::MatrixXd& sigma_rr,
 Eigen::MatrixXd CovarianceBounds::weighted_residual(const Eigen::Ref<const Eigen::MatrixXd>& R,
                                                     int first, int last,
                                                     const Eigen::MatrixXd& W) const {
-  const int d = block_dim_;
-  Eigen::MatrixXd sum = R.topRows(d).transpose() * W * R.topRows(d);
-  for (int j = std::max(first, 1); j < last; ++j) {
-    const auto R_j = R.middleRows(Eigen::Index{j} * d, d);
-    sum.noalias() += R_j.transpose() * entries_[static_cast<size_t>(j)].bound * R_j;
-  }
-  return sum;
+  return weighted_block_gram(R, first, last, W, [&](int j) -> const Eigen::MatrixXd& {
+    return entries_[static_cast<size_t>(j)].bound;
+  });
 }
 
 Status CovarianceBounds::set_recovery_with(

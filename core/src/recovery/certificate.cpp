@@ -28,4 +28,16 @@ double lambda_max_scaled(const Eigen::MatrixXd& G, const Eigen::MatrixXd& W) {
   return std::max(0.0, solver.eigenvalues().maxCoeff());
 }
 
+Eigen::MatrixXd weighted_block_gram(const Eigen::Ref<const Eigen::MatrixXd>& R, int first, int last,
+                                    const Eigen::MatrixXd& W,
+                                    const std::function<const Eigen::MatrixXd&(int)>& bound) {
+  const auto d = W.rows();
+  Eigen::MatrixXd sum = R.topRows(d).transpose() * W * R.topRows(d);
+  for (int j = std::max(first, 1); j < last; ++j) {
+    const auto R_j = R.middleRows(j * d, d);
+    sum.noalias() += R_j.transpose() * bound(j) * R_j;
+  }
+  return sum;
+}
+
 }  // namespace nav::core

@@ -20,6 +20,7 @@
 // pose graphs with one gauge prior: docs/consistency.md "The certificate", "K3 and the floor
 // at the time of use"). All three hold whatever the residual; the smallest is used.
 #include <Eigen/Core>
+#include <functional>
 
 namespace nav::core {
 
@@ -38,5 +39,11 @@ double kappa_squared_split(double a, double b);
 double lambda_max_symmetric(const Eigen::MatrixXd& m);
 /// λmax(W^-½ G W^-½) for symmetric G and SPD W (generalised eigen-solve); +inf if it fails.
 double lambda_max_scaled(const Eigen::MatrixXd& G, const Eigen::MatrixXd& W);
+
+/// R_0ᵀ W R_0 + Σ_j R_jᵀ B_jj R_j over j in [max(first, 1), last), R_j the d x d block rows of
+/// R (n x d, d = W's size), B_jj = bound(j): K2's sum (first = 0), K3's T part (first = k).
+Eigen::MatrixXd weighted_block_gram(const Eigen::Ref<const Eigen::MatrixXd>& R, int first, int last,
+                                    const Eigen::MatrixXd& W,
+                                    const std::function<const Eigen::MatrixXd&(int)>& bound);
 
 }  // namespace nav::core
