@@ -167,7 +167,7 @@ void KeptEqualFactor::reset() {
   present_.clear();
   factored_ = InformationMatrix(1);
   last_update_ = {};  // a refactorisation modified nothing
-  changed_rows_known_ = false;
+  changed_rows_.reset();
 }
 
 double KeptEqualFactor::factor_nnz() const {
@@ -392,7 +392,7 @@ void KeptEqualFactor::copy_rows(const InformationMatrix& lambda, const std::vect
 
 Status KeptEqualFactor::update(const InformationMatrix& lambda) {
   last_update_ = {};
-  changed_rows_known_ = false;
+  changed_rows_.reset();
   const int n_old = factored_.num_blocks(), n_new = lambda.num_blocks();
   if (!has_factor() || lambda.block_dim() != factored_.block_dim() || n_new < n_old) {
     return Status::Error(StatusCode::kInvalidArgument,
@@ -456,7 +456,6 @@ Status KeptEqualFactor::update(const InformationMatrix& lambda) {
   if (in_place) added.push_back(kept);
   copy_rows(lambda, added);
   changed_rows_ = std::move(added);
-  changed_rows_known_ = true;
   return Status::Ok();
 }
 

@@ -44,21 +44,27 @@ template <int C>
   }
 }
 
-/// Row j of the backward pass over C chunks of 4 columns: it gathers the rows below it in
-/// column j.
+/// Row j of the backward pass over C chunks of 4 columns: it gathers the rows of column j's
+/// entries L.p[j]+1 .. end-1.
 template <int C>
-[[gnu::always_inline]] inline void backward_column(const SimplicialLdl& L, int j, double* Y,
-                                                   std::ptrdiff_t stride) {
+[[gnu::always_inline]] inline void backward_entries(const SimplicialLdl& L, int j, int end,
+                                                    double* Y, std::ptrdiff_t stride) {
   double* yj = Y + j * stride;
   v4d acc[C];
   for (int c = 0; c < C; ++c) acc[c] = NAV_LOAD(yj + c * kLanes);
-  const int end = L.p[j] + L.nz[j];
   for (int k = L.p[j] + 1; k < end; ++k) {
     const double l = L.value[k];
     const double* yi = Y + L.row[k] * stride;
     for (int c = 0; c < C; ++c) acc[c] -= l * NAV_LOAD(yi + c * kLanes);
   }
   for (int c = 0; c < C; ++c) NAV_STORE(yj + c * kLanes, acc[c]);
+}
+
+/// Row j of the backward pass: it gathers the rows below it in column j.
+template <int C>
+[[gnu::always_inline]] inline void backward_column(const SimplicialLdl& L, int j, double* Y,
+                                                   std::ptrdiff_t stride) {
+  backward_entries<C>(L, j, L.p[j] + L.nz[j], Y, stride);
 }
 
 /// The backward pass column by column.
@@ -119,17 +125,10 @@ template <int G, int C>
     for (int g = 0; g < G; ++g)
       for (int c = 0; c < C; ++c) NAV_STORE(Y + (j0 + c0 + g) * stride + c * kLanes, acc[g][c]);
   }
+  // Column col's entries in the block come first (block_columns checked their rows).
   for (int col = d - 2; col >= 0; --col) {
-    const int j = j0 + col, p = L.p[j];
-    double* yj = Y + j * stride;
-    v4d acc[C];
-    for (int c = 0; c < C; ++c) acc[c] = NAV_LOAD(yj + c * kLanes);
-    for (int t = 1; t < d - col; ++t) {
-      const double l = L.value[p + t];
-      const double* yi = yj + t * stride;
-      for (int c = 0; c < C; ++c) acc[c] -= l * NAV_LOAD(yi + c * kLanes);
-    }
-    for (int c = 0; c < C; ++c) NAV_STORE(yj + c * kLanes, acc[c]);
+    const int j = j0 + col;
+    backward_entries<C>(L, j, L.p[j] + d - col, Y, stride);
   }
 }
 

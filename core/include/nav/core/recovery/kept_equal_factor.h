@@ -46,6 +46,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "nav/core/filter/information_matrix.h"
@@ -103,7 +104,7 @@ class KeptEqualFactor final : public Preconditioner {
   /// the appended states, the blocks of a rank update); nullptr after factor(), reset() or a
   /// failed update (unknown). Under the premise of the file comment.
   const std::vector<int>* rows_changed_by_last_update() const {
-    return changed_rows_known_ ? &changed_rows_ : nullptr;
+    return changed_rows_ ? &*changed_rows_ : nullptr;
   }
   /// Blocks the last solve's backward pass took as supernodes (ldl_solve.h), for the tests.
   int last_solve_supernodes() const { return last_solve_supernodes_; }
@@ -152,8 +153,7 @@ class KeptEqualFactor final : public Preconditioner {
   mutable std::vector<double> rows_;     // right-hand sides by rows, in slot space
   mutable std::vector<double> forward_;  // one right-hand side, in slot space
   mutable int last_solve_supernodes_ = 0;
-  std::vector<int> changed_rows_;  // rows_changed_by_last_update()
-  bool changed_rows_known_ = false;
+  std::optional<std::vector<int>> changed_rows_;  // rows_changed_by_last_update()
 };
 
 }  // namespace nav::core
