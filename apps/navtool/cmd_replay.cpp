@@ -1,6 +1,6 @@
 // navtool replay DIVE_DIR_OR_LOG [--config C] [--speed X | --as-fast-as-possible] [--out DIR]
 // [--json]: plays a recorded dive (hil-tests/README.md) through the same decoders, time ordering
-// and NavFilter as navd (replay/dive_replay.h), with a dead-reckoning twin, and prints a
+// and NavFilter as navd (replay/dive_replay.h), with dead reckoning beside it, and prints a
 // JSON summary; --out writes the replay output directory (summary.json, trajectory.csv,
 // dead_reckoning.csv, states.csv, links.csv, proposals.csv, information_blocks.csv,
 // logdet.csv). Recovery: the configured fixed PCG iterations at each image, synchronously or
@@ -140,7 +140,7 @@ void add_replay(CLI::App& app) {
       "replay",
       "Replay a dive directory or dive.lcmlog through navd's decoders, time ordering and filter "
       "(ESDF, link proposal from the Algorithm 1 bounds, registration look-up, 5-dof gate), "
-      "plus a dead-reckoning twin; JSON summary, --out writes the replay output files "
+      "plus dead reckoning; JSON summary, --out writes the replay output files "
       "(hil-tests/README.md). Recovery: fixed PCG iterations (filter.cg_iterations_per_step) "
       "synchronously at each image, or on the recovery thread (filter.recovery_thread: true) "
       "taken at a data time (filter.recovery_handoff_s after each image); deterministic.");

@@ -5,21 +5,16 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <optional>
 #include <stdexcept>
 #include <string>
 
 #include "nav/core/geometry/rotation.h"
 #include "nav/core/navigation/chi_square.h"
-#include "nav/core/navigation/held_prediction.h"
+#include "nav/core/navigation/robot_prediction.h"
 
 namespace nav::core {
 namespace {
-
-constexpr double kInitialSigmaFactor = 10.0;
-/// Attitude sigma added by a held prediction step (held_prediction.h): half a turn, i.e. lost.
-constexpr double kLostAttitudeSigmaRad = std::numbers::pi;
 
 Status error(StatusCode code, const std::string& what) {
   return Status::Error(code, "NavFilter: " + what);
@@ -35,24 +30,6 @@ StateRecoveryOptions filter_thread_recovery(const NavFilterOptions& options) {
   o.iterations_per_step = 0;
   o.preconditioner = RecoveryPreconditioner::kBlockJacobi;  // no factorisation on this thread
   o.renewal_lag = 0;
-  return o;
-}
-
-/// The options, checked (std::invalid_argument naming the values otherwise).
-NavFilterOptions validated(NavFilterOptions o) {
-  if (!(o.max_predict_step_s > 0.0) ||
-      !(o.min_predict_step_s >= 0.0 && o.min_predict_step_s < o.max_predict_step_s) ||
-      !(o.default_altitude_m > 0.0) || !(o.camera_gate_chi2 > 0.0) ||
-      !(o.initial_xy_sigma_m > 0.0) || !(o.initial_velocity_sigma_mps > 0.0) ||
-      !(o.initial_rate_sigma_radps > 0.0)) {
-    throw std::invalid_argument(
-        "NavFilterOptions: max_predict_step_s, default_altitude_m, camera_gate_chi2 and the "
-        "initial sigmas must be > 0, min_predict_step_s in [0, max_predict_step_s)");
-  }
-  if (!(o.recovery_handoff_s >= 0.0 && o.recovery_handoff_s <= 3600.0)) {
-    throw std::invalid_argument("NavFilterOptions: recovery_handoff_s must be in [0, 3600] s, is " +
-                                std::to_string(o.recovery_handoff_s));
-  }
   return o;
 }
 
@@ -205,26 +182,10 @@ Status NavFilter::process(const Measurement& m) {
 }
 
 Status NavFilter::try_initialise(const Measurement& m) {
-  if (init_.held.empty()) init_.first_time_us = validity_us(m);
-  if (init_.held.size() < kMaxHeld) {
-    init_.held.push_back(m);
-  } else {
+  if (!init_.hold(m, sensors_)) {
     ++counters_.before_initialisation;  // dropped: no attitude/depth for too long
   }
-  if (const auto* att = std::get_if<Attitude>(&m)) {
-    const BodyAttitude body = sensors_.body_attitude(*att);
-    if (body.has_roll_pitch) {
-      init_.roll_pitch = body;
-      init_.roll_pitch_sensor = att->time.sensor_index;
-    }
-    if (body.has_heading) {
-      init_.heading = body;
-      init_.heading_sensor = att->time.sensor_index;
-    }
-  } else if (const auto* depth = std::get_if<Depth>(&m)) {
-    init_.depth = *depth;
-  }
-  if (!(init_.roll_pitch && init_.heading && init_.depth)) return Status::Ok();
+  if (!init_.ready()) return Status::Ok();
   // The world origin is the vehicle at the start of the dive (hil-tests/README.md): start at
   // the first measurement's time and replay everything held so far through the filter.
   if (Status s = initialise(init_.first_time_us); !s.ok()) return s;
@@ -238,30 +199,11 @@ Status NavFilter::try_initialise(const Measurement& m) {
 }
 
 Status NavFilter::initialise(std::int64_t t_us) {
-  const std::size_t depth_sensor = init_.depth->time.sensor_index;
-  const Vec3 rpy(init_.roll_pitch->roll_rad, init_.roll_pitch->pitch_rad,
-                 init_.heading->heading_rad);
-  const Vec3 lever = sensors_.depth(depth_sensor).p_body_sensor_m;
-  Vec12 x0 = Vec12::Zero();
-  x0(2) = init_.depth->depth_m - (rotation_from_euler(rpy) * lever)(2);
-  x0.segment<3>(3) = rpy;
-  Vec12 sigma;
-  sigma << options_.initial_xy_sigma_m, options_.initial_xy_sigma_m,
-      std::sqrt(sensors_.depth_noise(depth_sensor)(0, 0)), 0, 0, 0,
-      Vec3::Constant(options_.initial_velocity_sigma_mps),
-      Vec3::Constant(options_.initial_rate_sigma_radps);
-  // Attitude prior: the attitude sensor's own noise (the first message is a measurement).
-  // Attitude and depth priors 10x the sensors' sigmas: the messages they come from are applied
-  // again as measurement updates once the held measurements are replayed.
-  sigma(2) *= kInitialSigmaFactor;
-  sigma(3) = sigma(4) =
-      kInitialSigmaFactor * std::sqrt(sensors_.roll_pitch_noise(init_.roll_pitch_sensor)(0, 0));
-  sigma(5) = kInitialSigmaFactor * std::sqrt(sensors_.heading_noise(init_.heading_sensor)(0, 0));
-  const Mat12 P0 = sigma.array().square().matrix().asDiagonal();
-  if (Status s = filter_.initialize(x0, P0); !s.ok()) return s;
-  if (Status s = bounds_.initialize_robot(P0); !s.ok()) return s;
-  if (Status s = recovery_.initialize(x0, P0); !s.ok()) return s;
-  warm_.restart(P0);
+  const RobotPrior prior = initial_robot_prior(init_, sensors_, options_);
+  if (Status s = filter_.initialize(prior.x0, prior.P0); !s.ok()) return s;
+  if (Status s = bounds_.initialize_robot(prior.P0); !s.ok()) return s;
+  if (Status s = recovery_.initialize(prior.x0, prior.P0); !s.ok()) return s;
+  warm_.restart(prior.P0);
   initialised_ = true;
   time_us_ = t_us;
   last_validity_us_ = t_us;
@@ -269,53 +211,35 @@ Status NavFilter::initialise(std::int64_t t_us) {
 }
 
 Status NavFilter::advance_to(std::int64_t t_us) {
-  // Equal steps of at most max_predict_step_s (no short remainder step, see min_predict_step_s).
-  const auto max_step_us = std::max<std::int64_t>(
-      1, static_cast<std::int64_t>(std::llround(options_.max_predict_step_s * 1e6)));
-  const std::int64_t gap_us = t_us - time_us_;
-  const std::int64_t steps = (gap_us + max_step_us - 1) / max_step_us;
-  for (std::int64_t k = 1; k <= steps; ++k) {
-    const std::int64_t next_us = time_us_ + (t_us - time_us_) / (steps - k + 1);
-    if (Status s = predict_once(static_cast<double>(next_us - time_us_) * 1e-6); !s.ok()) {
-      return s;
-    }
-    time_us_ = next_us;
-  }
-  return Status::Ok();
+  return advance_in_steps(time_us_, t_us, options_.max_predict_step_s,
+                          [this](double dt_s) { return predict_once(dt_s); });
 }
 
 Status NavFilter::predict_once(double dt_s) {
   relinearise_robot();
-  const Vec12 x = filter_.mean_block(Esdf::kRobotBlock);
-  Mat12 F;
-  Vec12 f;
-  Mat12 Q;
+  RobotPrediction p;
   try {
-    f = process_.predict(x, dt_s, &F);
-    Q = process_.process_noise(x, dt_s);
-  } catch (const std::domain_error& e) {
-    // Pitch off the model's branch: a held step with the attitude and rates treated as lost
-    // (held_prediction.h) instead of ending the filter; counted, warned at the 1st, 2nd, 4th...
-    const HeldPrediction held = held_prediction(x, dt_s, process_.options(), kLostAttitudeSigmaRad,
-                                                options_.initial_rate_sigma_radps);
-    f = held.x_next;
-    F = held.F;
-    Q = held.Q;
-    const std::uint64_t n = ++counters_.predictions_held;
-    if ((n & (n - 1)) == 0) {
-      warn("NavFilter: prediction at t = " + std::to_string(time_us_) + " us held (" +
-           std::to_string(n) + " so far): " + e.what());
-    }
+    p = predict_robot(process_, filter_.mean_block(Esdf::kRobotBlock), dt_s,
+                      options_.initial_rate_sigma_radps);
   } catch (const std::exception& e) {
     return error(StatusCode::kOutOfRange,
                  "prediction at t = " + std::to_string(time_us_) + " us: " + e.what());
   }
+  if (!p.held_reason.empty()) {
+    // Pitch off the model's branch: a held step with the attitude and rates treated as lost
+    // (held_prediction.h) instead of ending the filter; counted, warned at the 1st, 2nd, 4th...
+    const std::uint64_t n = ++counters_.predictions_held;
+    if ((n & (n - 1)) == 0) {
+      warn("NavFilter: prediction at t = " + std::to_string(time_us_) + " us held (" +
+           std::to_string(n) + " so far): " + p.held_reason);
+    }
+  }
   const bool keep = pending_image_ >= 0;
   int kept = -1;  // the block keeping the pending image
-  if (Status s = filter_.predict(f, F, Q, keep, &kept); !s.ok()) return s;
-  if (Status s = bounds_.predict_robot(F, Q, keep, kept); !s.ok()) return s;
+  if (Status s = filter_.predict(p.f, p.F, p.Q, keep, &kept); !s.ok()) return s;
+  if (Status s = bounds_.predict_robot(p.F, p.Q, keep, kept); !s.ok()) return s;
   ++counters_.predictions;
-  warm_.predicted_with(F, Q, keep ? kept : -1);
+  warm_.predicted_with(p.F, p.Q, keep ? kept : -1);
   if (keep) {
     if (image_of_block_.size() <= static_cast<std::size_t>(kept)) {
       image_of_block_.resize(static_cast<std::size_t>(kept) + 1, -1);
@@ -395,22 +319,12 @@ void NavFilter::fuse(const AidObservation<Model>& aid) {
 }
 
 void NavFilter::update_robot(const Measurement& m) {
-  const std::size_t sensor = time_of(m).sensor_index;
   try {
-    if (const auto* dvl = std::get_if<DvlVelocity>(&m)) {
-      fuse(dvl_velocity_aid(sensors_, *dvl));
-    } else if (const auto* att = std::get_if<Attitude>(&m)) {
-      const BodyAttitude body = sensors_.body_attitude(*att);
-      if (body.has_roll_pitch) fuse(roll_pitch_aid(sensors_, sensor, body));
-      if (body.has_heading) fuse(heading_aid(sensors_, sensor, body));
-    } else if (const auto* depth = std::get_if<Depth>(&m)) {
-      fuse(depth_aid(sensors_, *depth));
-    } else if (const auto* alt = std::get_if<Altitude>(&m)) {
+    if (for_each_aid(sensors_, m, [this](const auto& aid) { fuse(aid); })) return;
+    if (const auto* alt = std::get_if<Altitude>(&m)) {
       if (alt->altitude_m > 0.0 && std::isfinite(alt->altitude_m)) altitude_m_ = alt->altitude_m;
-      ++counters_.unused;
-    } else {
-      ++counters_.unused;  // angular rates: no rate model in the filter
     }
+    ++counters_.unused;  // altitude sets the footprints; angular rates: no rate model
   } catch (const std::out_of_range& e) {
     ++counters_.update_failures;
     warn(std::string("NavFilter: ") + e.what());

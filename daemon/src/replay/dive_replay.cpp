@@ -49,11 +49,12 @@ struct PublishedRecorder {
 };
 
 /// Feeds one time-ordered measurement to both filters (the SLAM filter only if its checkpoint
-/// does not hold it yet; the dead-reckoning twin through its worker thread); false on a failure
-/// (run.error set for the SLAM filter; the twin's message comes from FilterWorker::finish()).
+/// does not hold it yet; dead reckoning through its worker thread); false on a failure (run.error
+/// set for the SLAM filter; dead reckoning's message comes from FilterWorker::finish()).
 bool filter_one(ReplayRun& run, const Measurement& m,
                 const std::function<void(const NavFilter&)>& after, Checkpointing& ckpt,
-                PublishedRecorder& published, FilterWorker* twin, vision::VisionLink* vision) {
+                PublishedRecorder& published, FilterWorker* dead_reckoning,
+                vision::VisionLink* vision) {
   const bool held = ckpt.skipper && ckpt.skipper->skip(m);
   if (!held) {
     if (vision) vision->before_measurement(time_of(m).host_realtime_us, *run.registrations);
@@ -66,9 +67,9 @@ bool filter_one(ReplayRun& run, const Measurement& m,
     if (after) after(*run.slam);
     published.after(*run.slam, run.published);
   }
-  if (twin) {
-    twin->push(m);
-    if (twin->failed()) return false;
+  if (dead_reckoning) {
+    dead_reckoning->push(m);
+    if (dead_reckoning->failed()) return false;
   }
   return true;
 }
@@ -123,21 +124,7 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
   const NavFilterOptions filter_options = filter_options_from_config(config);
   run.slam = std::make_unique<NavFilter>(filter_options, run.registrations.get());
   if (options.dead_reckoning) {
-    NavFilterOptions dr = filter_options;
-    dr.propose_links = false;
-    // The twin already runs on its own thread (FilterWorker): a recovery thread of its own
-    // would only compete with the SLAM filter's for the cores. Synchronous recovery.
-    dr.recovery_thread = false;
-    // The baseline is the best dead reckoning, not the SLAM filter's recovery without links: a
-    // recovery that has not converged moves the means the predictions are linearised at, and
-    // block Jacobi's 5 iterations on a chain of hundreds of states leave metres of drift that is
-    // the solver's, not the sensors'. A factor kept equal to Λ solves exactly in one iteration,
-    // and a chain's factor has little fill (docs/consistency.md "The dead-reckoning baseline").
-    dr.recovery.preconditioner = core::RecoveryPreconditioner::kFactor;
-    dr.recovery.keep_factor_equal = true;
-    // No link proposal reads the twin's bounds: no exact-marginal refreshes of them.
-    dr.recovery.refresh_interval = std::numeric_limits<int>::max();
-    run.dead_reckoning = std::make_unique<NavFilter>(dr, nullptr);
+    run.dead_reckoning = std::make_unique<core::DeadReckoningFilter>(filter_options);
   }
   PublishedRecorder published;
   published.period_us = std::max<std::int64_t>(
@@ -179,10 +166,12 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
   std::atomic<bool> stop{false}, done{false};
   std::string source_error;
   const auto start = std::chrono::steady_clock::now();
-  // The twin runs on its own thread (the second core), fed the same ordered measurements.
-  std::unique_ptr<FilterWorker> twin;
+  // Dead reckoning runs on its own thread (the second core), fed the same ordered measurements.
+  std::unique_ptr<FilterWorker> dr_worker;
   if (run.dead_reckoning) {
-    twin = std::make_unique<FilterWorker>(*run.dead_reckoning, "dead-reckoning filter");
+    dr_worker = std::make_unique<FilterWorker>(
+        [dr = run.dead_reckoning.get()](const Measurement& m) { return dr->process(m); },
+        "dead-reckoning filter");
   }
   std::thread source([&] {
     try {
@@ -204,7 +193,7 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
     while (ok) {
       std::optional<Measurement> m = ordering.pop_ready();
       if (!m) break;
-      ok = filter_one(run, *m, options.after_measurement, ckpt, published, twin.get(),
+      ok = filter_one(run, *m, options.after_measurement, ckpt, published, dr_worker.get(),
                       vision.get());
     }
     if (source_done && batch.empty() && queue.size() == 0) break;
@@ -213,7 +202,7 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
   while (ok && !stopped()) {
     std::optional<Measurement> m = ordering.pop_any();
     if (!m) break;
-    ok = filter_one(run, *m, options.after_measurement, ckpt, published, twin.get(),
+    ok = filter_one(run, *m, options.after_measurement, ckpt, published, dr_worker.get(),
                     vision.get());
   }
   stop.store(true);
@@ -224,9 +213,9 @@ ReplayRun run_replay(const std::string& log_path, const NavdConfig& config,
   if (ok) {
     if (core::Status s = run.slam->finish(); !s.ok()) run.error = "SLAM finish: " + s.to_string();
   }
-  if (twin) {
-    const std::string twin_error = twin->finish(ok);
-    if (run.error.empty() && !twin_error.empty()) run.error = twin_error;
+  if (dr_worker) {
+    const std::string dr_error = dr_worker->finish();
+    if (run.error.empty() && !dr_error.empty()) run.error = dr_error;
   }
   run.wall_s = seconds_since(start) - run.time_of_use_s;
   run.slam->set_before_proposal({});  // it refers to this frame's `run` and `options`

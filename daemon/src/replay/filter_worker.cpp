@@ -5,8 +5,10 @@
 
 namespace nav::daemon {
 
-FilterWorker::FilterWorker(NavFilter& filter, std::string name, std::size_t batch_size)
-    : filter_(filter), name_(std::move(name)), batch_size_(batch_size > 0 ? batch_size : 1) {
+FilterWorker::FilterWorker(Apply apply, std::string name, std::size_t batch_size)
+    : apply_(std::move(apply)),
+      name_(std::move(name)),
+      batch_size_(batch_size > 0 ? batch_size : 1) {
   pending_.reserve(batch_size_);
   thread_ = std::thread([this] { run(); });
 }
@@ -51,12 +53,11 @@ bool FilterWorker::failed() const {
   return failed_;
 }
 
-std::string FilterWorker::finish(bool finish_filter) {
+std::string FilterWorker::finish() {
   hand_over();
   {
     const std::lock_guard<std::mutex> lock(mutex_);
     closing_ = true;
-    finish_filter_ = finish_filter;
   }
   cv_.notify_one();
   thread_.join();
@@ -81,7 +82,7 @@ void FilterWorker::run() {
     }
     for (const auto& batch : work) {
       for (const Measurement& m : batch) {
-        if (core::Status s = filter_.process(m); !s.ok()) {
+        if (core::Status s = apply_(m); !s.ok()) {
           const std::lock_guard<std::mutex> lock(mutex_);
           error_ = name_ + " at t = " + std::to_string(validity_us(m)) + " us: " + s.to_string();
           failed_ = true;
@@ -90,14 +91,8 @@ void FilterWorker::run() {
       }
     }
     if (closing) {
-      bool finish_filter = false;
-      {
-        const std::lock_guard<std::mutex> lock(mutex_);
-        if (!batches_.empty()) continue;  // pushed before closing, not yet taken
-        finish_filter = finish_filter_;
-      }
-      if (finish_filter) (void)filter_.finish();
-      return;
+      const std::lock_guard<std::mutex> lock(mutex_);
+      if (batches_.empty()) return;  // else pushed before closing, not yet taken
     }
   }
 }

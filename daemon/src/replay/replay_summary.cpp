@@ -26,16 +26,18 @@ json optional_pose_json(const std::optional<core::Vec6>& x) {
   return x ? pose_json(*x) : json(nullptr);
 }
 
-/// The robot's published pose (NavFilter::robot_mean(): after every update), or none while the
-/// filter has no state yet (e.g. the dead-reckoning twin of a resumed replay stopped before its
-/// first measurements).
-std::optional<core::Vec6> robot_pose(const core::NavFilter& filter) {
+/// The robot's published pose (robot_mean(): after every update), or none while the filter has
+/// no state yet (e.g. dead reckoning in a resumed replay stopped before its first measurements).
+/// Filter: core::NavFilter or core::DeadReckoningFilter.
+template <class Filter>
+std::optional<core::Vec6> robot_pose(const Filter& filter) {
   if (!filter.initialised()) return std::nullopt;
-  return filter.robot_mean().head<6>();
+  return core::Vec12(filter.robot_mean()).head<6>();
 }
 
 /// Per sensor name: the updates the filter did not fuse (innovation_stats.h `rejected`).
-std::map<std::string, std::uint64_t> rejected_by_sensor(const core::NavFilter& filter) {
+template <class Filter>
+std::map<std::string, std::uint64_t> rejected_by_sensor(const Filter& filter) {
   std::map<std::string, std::uint64_t> rejected;
   for (const core::SensorInnovation& r : filter.innovations().sensors()) {
     rejected[r.name] = r.rejected;

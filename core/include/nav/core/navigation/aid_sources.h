@@ -43,4 +43,24 @@ AidObservation<HeadingModel> heading_aid(const SensorModels& sensors, std::size_
                                          const BodyAttitude& body);
 AidObservation<DepthModel> depth_aid(const SensorModels& sensors, const Depth& m);
 
+/// Calls fuse(observation) for each aid `m` carries (a DVL velocity; the roll/pitch and the
+/// heading of an attitude; a depth) and returns true; false for anything else (altitude, angular
+/// rates, images). Throws std::out_of_range for a sensor index outside the sensors. `sensors`
+/// remembers partial attitude messages (SensorModels::body_attitude).
+template <class Fuse>
+bool for_each_aid(SensorModels& sensors, const Measurement& m, Fuse&& fuse) {
+  if (const auto* dvl = std::get_if<DvlVelocity>(&m)) {
+    fuse(dvl_velocity_aid(sensors, *dvl));
+  } else if (const auto* att = std::get_if<Attitude>(&m)) {
+    const BodyAttitude body = sensors.body_attitude(*att);
+    if (body.has_roll_pitch) fuse(roll_pitch_aid(sensors, att->time.sensor_index, body));
+    if (body.has_heading) fuse(heading_aid(sensors, att->time.sensor_index, body));
+  } else if (const auto* depth = std::get_if<Depth>(&m)) {
+    fuse(depth_aid(sensors, *depth));
+  } else {
+    return false;
+  }
+  return true;
+}
+
 }  // namespace nav::core

@@ -18,11 +18,12 @@
 //   and every held measurement is processed. Beyond 1024 held they are dropped (counted).
 // * Predict: constant-velocity model to each measurement's time in equal steps of at most
 //   max_predict_step_s; one less than min_predict_step_s after the filter's time is applied at
-//   that time. Before each prediction the robot is relinearised in O(1) at its conditional
-//   mean given its neighbours: μ_r = Λ_rr⁻¹(η_r − Σ_j Λ_rj μ_j) (angles not wrapped: μ must
-//   stay on the branch η encodes).
-//   A step the model cannot take (pitch beyond +-89.5 deg) is held instead (held_prediction.h:
-//   attitude and rates treated as lost, counted in predictions_held): the filter goes on.
+//   that time. The steps and the held step are shared with dead reckoning
+//   (robot_prediction.h). Before each
+//   prediction the robot is relinearised in O(1) at its conditional mean given its neighbours: μ_r
+//   = Λ_rr⁻¹(η_r − Σ_j Λ_rj μ_j) (angles not wrapped: μ must stay on the branch η encodes). A step
+//   the model cannot take (pitch beyond +-89.5 deg) is held instead (held_prediction.h: attitude
+//   and rates treated as lost, counted in predictions_held): the filter goes on.
 // * Update: each aid source's observation passes its innovation gate (aid_gate.h: NIS against
 //   a chi-square gate, runs of rejections, reset after a timeout; a rejected one changes
 //   nothing and is counted in innovations()) and is fused into the ESDF and, as a Kalman update
@@ -58,6 +59,7 @@
 #include "nav/core/filter/esdf.h"
 #include "nav/core/models/constant_velocity.h"
 #include "nav/core/navigation/aid_sources.h"
+#include "nav/core/navigation/initial_state.h"
 #include "nav/core/navigation/innovation_stats.h"
 #include "nav/core/navigation/link_gate.h"
 #include "nav/core/navigation/link_proposer.h"
@@ -130,16 +132,6 @@ class NavFilter {
   void restore_map(Esdf filter, CovarianceBounds bounds, StateRecovery recovery);
 
  private:
-  /// Measurements held until the first attitude, heading and depth (file comment).
-  struct Initialisation {
-    std::optional<BodyAttitude> roll_pitch, heading;
-    std::optional<Depth> depth;
-    std::size_t roll_pitch_sensor = 0, heading_sensor = 0;
-    std::vector<Measurement> held;
-    std::int64_t first_time_us = 0;
-  };
-  static constexpr std::size_t kMaxHeld = 1024;
-
   Status try_initialise(const Measurement& m);
   Status initialise(std::int64_t t_us);
   Status advance_to(std::int64_t t_us);
@@ -178,7 +170,7 @@ class NavFilter {
   AidGate aid_gate_;
   PendingRegistrations pending_;
   WarmStartTracker warm_;
-  Initialisation init_;
+  HeldInitialisation init_;
   bool initialised_ = false;
   std::int64_t time_us_ = 0;           ///< the robot's time
   std::int64_t last_validity_us_ = 0;  ///< newest measurement processed

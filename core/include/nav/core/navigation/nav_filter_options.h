@@ -70,4 +70,7 @@ struct NavFilterOptions {
   std::function<void(const std::string&)> warn;
 };
 
+/// The options, checked: std::invalid_argument naming the values otherwise.
+NavFilterOptions validated(NavFilterOptions o);
+
 }  // namespace nav::core

@@ -1,8 +1,8 @@
 #pragma once
 // Replay of a recorded dive through the same code as navd on the vehicle (hil-tests/README.md):
 // dive-log source thread (run_dive_log_source: RAW_* through the sensor decoders, NAV_IMAGE) ->
-// MeasurementQueue -> TimeOrderingBuffer (filter.latency_window_ms) -> NavFilter, plus a second
-// NavFilter fed the same measurements without camera links (dead reckoning). Registrations
+// MeasurementQueue -> TimeOrderingBuffer (filter.latency_window_ms) -> NavFilter, plus a
+// DeadReckoningFilter fed the same measurements (the robot alone, no camera links). Registrations
 // (NAV_REGISTRATION) are read before the replay (load_registrations), as the vision stage's
 // stand-in; with vision.enabled navd registers the dive's frames itself instead, answers applied
 // at data times (vision/vision_link.h), so the output is deterministic too.
@@ -11,10 +11,8 @@
 // synchronously at each image, or with filter.recovery_thread on NavFilter's recovery thread,
 // whose results the filter takes at data times (filter.recovery_handoff_s; nav_filter.h
 // "Recovery thread"); either way the result does not depend on thread timing: as
-// fast as possible, the same log and config give the same output. The dead-reckoning twin
-// recovers synchronously (it already runs on its own thread) and exactly, whatever the config
-// (a factor kept equal to its Λ: the baseline is the best dead reckoning, not the SLAM
-// filter's recovery without links).
+// fast as possible, the same log and config give the same output. Dead reckoning runs on a
+// thread of its own (FilterWorker), in covariance form (core/navigation/dead_reckoning.h).
 //
 // Time of use (ReplayOptions::time_of_use_every_images): at chosen images, before their link
 // proposal, the bounds and proposal joints against the exact marginals of that moment.
@@ -23,6 +21,7 @@
 // (direct solve), exact marginals (CHOLMOD + Takahashi), bound-vs-exact checks, and the Fig. 3
 // log-det ratios (ours and Markov blanket, robot vs every delayed state).
 
+#include <Eigen/Core>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -31,17 +30,16 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-
-#include "nav/daemon/config/config.h"
-#include "nav/daemon/filter/filter_options.h"
-#include "nav/daemon/queue/measurement_queue.h"
-#include "nav/daemon/filter/registration_message.h"
+#include "nav/core/navigation/dead_reckoning.h"
 #include "nav/core/navigation/nav_filter.h"
 #include "nav/core/navigation/registration_table.h"
 #include "nav/core/recovery/time_of_use.h"
-#include "nav/daemon/sources/dive_log_source.h"
+#include "nav/daemon/config/config.h"
+#include "nav/daemon/filter/filter_options.h"
+#include "nav/daemon/filter/registration_message.h"
+#include "nav/daemon/queue/measurement_queue.h"
 #include "nav/daemon/queue/time_ordering.h"
+#include "nav/daemon/sources/dive_log_source.h"
 #include "nav/daemon/vision/vision_link.h"
 
 namespace nav::daemon {
@@ -50,7 +48,7 @@ struct ReplayOptions {
   double speed = 1.0;               ///< x real time (> 0) unless as_fast_as_possible
   bool as_fast_as_possible = true;
   std::size_t queue_capacity = 4096;
-  bool dead_reckoning = true;       ///< also run the filter without links
+  bool dead_reckoning = true;  ///< also run dead reckoning (no camera links)
   /// Called on the filter thread after each measurement the SLAM filter processed (navd
   /// publishes from here); must be quick.
   std::function<void(const NavFilter&)> after_measurement;
@@ -60,7 +58,7 @@ struct ReplayOptions {
   const std::atomic<bool>* stop = nullptr;
   /// navd: checkpoint the SLAM filter (config.checkpoint: path, period_s, keep; payload tagged
   /// with the log path) and resume from the newest valid checkpoint of this log, skipping the
-  /// measurements it holds (filter/nav_filter_checkpointer.h). The dead-reckoning twin is not
+  /// measurements it holds (filter/nav_filter_checkpointer.h). Dead reckoning is not
   /// checkpointed: it is fed every measurement, skipped or not.
   bool checkpoints = false;
   /// Input identity written into and required of the checkpoints ("": the log path). navd's
@@ -86,7 +84,8 @@ struct ReplayRun {
   std::string log_path;
   std::unique_ptr<RegistrationTable> registrations;
   std::unique_ptr<NavFilter> slam;
-  std::unique_ptr<NavFilter> dead_reckoning;  ///< null unless options.dead_reckoning
+  std::unique_ptr<core::DeadReckoningFilter>
+      dead_reckoning;  ///< null unless options.dead_reckoning
   DiveLogSourceCounters source;
   TimeOrderingStats ordering;
   double wall_s = 0.0;      ///< source start to the last measurement filtered

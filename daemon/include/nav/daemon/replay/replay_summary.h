@@ -61,9 +61,9 @@ struct ReplaySummary {
   // Estimates: x_m, y_m, z_m, roll_rad, pitch_rad, heading_rad.
   core::Vec6 final_pose = core::Vec6::Zero();    ///< robot, direct solve after the replay
   std::optional<core::Vec6> final_pose_running;  ///< robot, as published (none: no state yet)
-  bool has_dead_reckoning = false;               ///< the twin ran (key present when true)
+  bool has_dead_reckoning = false;               ///< dead reckoning ran (key present when true)
   std::optional<core::Vec6> dead_reckoning_final_pose;  ///< its robot (none: no state yet)
-  /// The twin's rejected_updates (below); key "dead_reckoning_rejected_updates" with the twin.
+  /// Dead reckoning's rejected_updates (below); key "dead_reckoning_rejected_updates" with it.
   std::map<std::string, std::uint64_t> dead_reckoning_rejected_updates;
 
   // Recovery.
