@@ -1,11 +1,9 @@
-// Tests of navigation/held_prediction.h and of NavFilter going on through a pitch beyond the
-// constant-velocity model's +-89.5 deg (nav_filter.h "Predict"): F against central differences
-// at off-branch pitches, Q's inflation by hand, and a filter fed attitude messages with the
-// pitch at -175 deg (as navd saw after a 100x replay) that holds those steps, keeps every
+// Tests of the held step of navigation/robot_prediction.h and of NavFilter going on through a pitch
+// beyond the constant-velocity model's +-89.5 deg (nav_filter.h "Predict"): F against central
+// differences at off-branch pitches, Q's inflation by hand, and a filter fed attitude messages with
+// the pitch at -175 deg (as navd saw after a 100x replay) that holds those steps, keeps every
 // published covariance positive definite (the pitch variance pi^2 after a held step), and predicts
 // with the model again once the attitude sensor brings the pitch back.
-
-#include "nav/core/navigation/held_prediction.h"
 
 #include <gtest/gtest.h>
 
@@ -19,6 +17,7 @@
 
 #include "nav/core/geometry/rotation.h"
 #include "nav/core/navigation/nav_filter.h"
+#include "nav/core/navigation/robot_prediction.h"
 #include "nav/testing/filter_sensors.h"
 #include "pose_test_support.h"
 
@@ -40,7 +39,7 @@ TEST(HeldPrediction, JacobianMatchesNumericAtOffBranchPitch) {
     x[kPitch] = (i % 2 == 0 ? 1.0 : -1.0) * pitch(rng);
     ASSERT_TRUE(pitch_is_singular(x[kPitch]));
     const double dt_s = dt(rng);
-    const HeldPrediction held = held_prediction(x, dt_s, noise, kPi, 0.05);
+    const RobotPrediction held = held_prediction(x, dt_s, noise, kPi, 0.05);
     const Eigen::MatrixXd N = numeric_jacobian(
         [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
           return held_prediction(Vec12(v), dt_s, noise, kPi, 0.05).x_next;
@@ -59,7 +58,7 @@ TEST(HeldPrediction, MovesAlongTheBodyVelocityHoldsAttitudeRestartsRatesAndInfla
   x[kQ] = 30.0;  // the rate that carried the pitch off
   const double dt_s = 0.1;
   const ConstantVelocityOptions noise;
-  const HeldPrediction held = held_prediction(x, dt_s, noise, kPi, 0.05);
+  const RobotPrediction held = held_prediction(x, dt_s, noise, kPi, 0.05);
   const Vec3 moved = dt_s * rotation_from_euler(x.segment<3>(kRoll)) * x.segment<3>(kU);
   EXPECT_LT(max_abs_diff(held.x_next.head<3>(), moved), 1e-15);
   EXPECT_EQ(held.x_next.segment<6>(kRoll), x.segment<6>(kRoll));  // attitude, velocity held

@@ -60,13 +60,7 @@ Status DeadReckoningFilter::try_initialise(const Measurement& m) {
   P_ = prior.P0;
   initialised_ = true;
   time_us_ = last_validity_us_ = init_.first_time_us;
-  std::vector<Measurement> held;
-  held.swap(init_.held);
-  counters_.measurements -= held.size();  // counted again below
-  for (const Measurement& h : held) {
-    if (Status s = process(h); !s.ok()) return s;
-  }
-  return Status::Ok();
+  return init_.replay(counters_.measurements, [this](const Measurement& h) { return process(h); });
 }
 
 Status DeadReckoningFilter::predict(double dt_s) {
@@ -78,7 +72,7 @@ Status DeadReckoningFilter::predict(double dt_s) {
                  "prediction at t = " + std::to_string(time_us_) + " us: " + e.what());
   }
   if (!p.held_reason.empty()) ++counters_.predictions_held;
-  x_ = p.f;
+  x_ = p.x_next;
   P_ = p.F * P_ * p.F.transpose() + p.Q;
   P_ = 0.5 * (P_ + P_.transpose()).eval();
   ++counters_.predictions;

@@ -189,13 +189,7 @@ Status NavFilter::try_initialise(const Measurement& m) {
   // The world origin is the vehicle at the start of the dive (hil-tests/README.md): start at
   // the first measurement's time and replay everything held so far through the filter.
   if (Status s = initialise(init_.first_time_us); !s.ok()) return s;
-  std::vector<Measurement> held;
-  held.swap(init_.held);
-  counters_.measurements -= held.size();  // counted again below
-  for (const Measurement& h : held) {
-    if (Status s = process(h); !s.ok()) return s;
-  }
-  return Status::Ok();
+  return init_.replay(counters_.measurements, [this](const Measurement& h) { return process(h); });
 }
 
 Status NavFilter::initialise(std::int64_t t_us) {
@@ -227,7 +221,7 @@ Status NavFilter::predict_once(double dt_s) {
   }
   if (!p.held_reason.empty()) {
     // Pitch off the model's branch: a held step with the attitude and rates treated as lost
-    // (held_prediction.h) instead of ending the filter; counted, warned at the 1st, 2nd, 4th...
+    // (robot_prediction.h) instead of ending the filter; counted, warned at the 1st, 2nd, 4th...
     const std::uint64_t n = ++counters_.predictions_held;
     if ((n & (n - 1)) == 0) {
       warn("NavFilter: prediction at t = " + std::to_string(time_us_) + " us held (" +
@@ -236,7 +230,7 @@ Status NavFilter::predict_once(double dt_s) {
   }
   const bool keep = pending_image_ >= 0;
   int kept = -1;  // the block keeping the pending image
-  if (Status s = filter_.predict(p.f, p.F, p.Q, keep, &kept); !s.ok()) return s;
+  if (Status s = filter_.predict(p.x_next, p.F, p.Q, keep, &kept); !s.ok()) return s;
   if (Status s = bounds_.predict_robot(p.F, p.Q, keep, kept); !s.ok()) return s;
   ++counters_.predictions;
   warm_.predicted_with(p.F, p.Q, keep ? kept : -1);

@@ -13,6 +13,7 @@
 #include "nav/core/navigation/nav_filter_options.h"
 #include "nav/core/navigation/sensor_measurements.h"
 #include "nav/core/navigation/sensor_models.h"
+#include "nav/core/status.h"
 
 namespace nav::core {
 
@@ -31,6 +32,11 @@ struct HeldInitialisation {
   /// attitude or depth still noted).
   bool hold(const Measurement& m, SensorModels& sensors);
   bool ready() const { return roll_pitch && heading && depth; }
+  /// Once the filter has started: hands every held measurement to process(m) in order and
+  /// forgets them; `counted` (the filter's measurement counter) is first reduced by their number,
+  /// as process counts them again. Returns the first error.
+  template <class Process>
+  Status replay(std::uint64_t& counted, Process&& process);
 };
 
 struct RobotPrior {
@@ -44,5 +50,16 @@ struct RobotPrior {
 /// and rates 0 with their initial sigmas.
 RobotPrior initial_robot_prior(const HeldInitialisation& init, const SensorModels& sensors,
                                const NavFilterOptions& options);
+
+template <class Process>
+Status HeldInitialisation::replay(std::uint64_t& counted, Process&& process) {
+  std::vector<Measurement> replayed;
+  replayed.swap(held);
+  counted -= replayed.size();
+  for (const Measurement& m : replayed) {
+    if (Status s = process(m); !s.ok()) return s;
+  }
+  return Status::Ok();
+}
 
 }  // namespace nav::core

@@ -22,7 +22,7 @@
 //   (robot_prediction.h). Before each
 //   prediction the robot is relinearised in O(1) at its conditional mean given its neighbours: μ_r
 //   = Λ_rr⁻¹(η_r − Σ_j Λ_rj μ_j) (angles not wrapped: μ must stay on the branch η encodes). A step
-//   the model cannot take (pitch beyond +-89.5 deg) is held instead (held_prediction.h: attitude
+//   the model cannot take (pitch beyond +-89.5 deg) is held instead (robot_prediction.h: attitude
 //   and rates treated as lost, counted in predictions_held): the filter goes on.
 // * Update: each aid source's observation passes its innovation gate (aid_gate.h: NIS against
 //   a chi-square gate, runs of rejections, reset after a timeout; a rejected one changes

@@ -51,7 +51,7 @@ struct NavFilterCounters {
   std::uint64_t candidates = 0, links_proposed = 0, links_accepted = 0, links_gated = 0;
   std::uint64_t registration_failed = 0, not_registered = 0;
   std::uint64_t outliers_rejected = 0, outliers_accepted = 0, bound_update_failures = 0;
-  /// Prediction steps held at a pitch off the model's branch (held_prediction.h).
+  /// Prediction steps held at a pitch off the model's branch (robot_prediction.h).
   std::uint64_t predictions_held = 0;
   double max_cg_relative_residual = 0.0;
 };
