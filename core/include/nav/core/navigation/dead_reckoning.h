@@ -8,13 +8,15 @@
 // §10.3): predict x ← f(x), P ← F P Fᵀ + Q; update K = P Hᵀ S⁻¹, x ← x + K ν,
 // P ← (I − K H) P (I − K H)ᵀ + K R Kᵀ (Joseph form), each aid linearised at the mean its
 // update sees. In exact arithmetic its robot is NavFilter's robot without links (a delayed
-// state without links does not change the robot's marginal); in floating point it does not
-// solve Λ μ = η over a chain of hundreds of delayed states with no link to tie it, whose
-// solution moves by decimetres with the last digits of Λ (docs/consistency.md), so its track
-// is a property of the sensors, not of the rounding.
+// state without links does not change the robot's marginal). In floating point the information
+// form loses digits at every prediction step of a few milliseconds (Q⁻¹ ~ dt⁻³ cancels in the
+// marginalisation of the old robot), and a chain of hundreds of delayed states with no link to
+// tie it carries them into its means, which a change of one measurement at the rounding level
+// then moves by decimetres; this filter's track moves by rounding only (docs/consistency.md
+// "The dead-reckoning baseline"): it is a property of the sensors.
 //
 // Contract: measurements in time-of-validity order (an older one is counted out_of_order and
-// skipped); O(1) per measurement; no allocation after the first images; not thread-safe.
+// skipped); O(1) per measurement, plus one record per image; not thread-safe.
 #include <cstdint>
 #include <vector>
 
