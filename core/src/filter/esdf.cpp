@@ -4,10 +4,10 @@
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
-
 #include <cmath>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 namespace nav::core {
@@ -34,6 +34,59 @@ std::pair<Eigen::Index, Eigen::Index> first_non_finite(const M& m) {
     }
   }
   return {-1, -1};
+}
+
+template <class M>
+M symmetric(const M& m) {
+  return 0.5 * (m + m.transpose());
+}
+
+/// The robot's terms of a marginalising prediction (the comment above Esdf::predict).
+struct RobotMarginalisation {
+  Block lambda_rr;          ///< S⁻¹
+  Block gain;               ///< A Ω⁻¹ = S⁻¹ F Σ_c
+  Segment eta_r;            ///< S⁻¹ (F Σ_c η_t + c)
+  Eigen::LLT<Block> omega;  ///< Ω = Λ_tt + FᵀQ⁻¹F, for the neighbours' terms
+  Segment omega_inv_b;      ///< Ω⁻¹ (η_t − FᵀQ⁻¹ c)
+};
+
+/// The terms from the old robot's block L_tt and vector eta_t, in D x D fixed-size arithmetic
+/// (Eigen::Dynamic: any block size); nullptr on success, else the matrix that is not positive
+/// definite.
+template <int D>
+const char* marginalise_robot(const Block& L_tt, const Segment& eta_t, const Block& F_block,
+                              const Block& Q, const Segment& c_block, RobotMarginalisation& out) {
+  using M = std::conditional_t<D == Eigen::Dynamic, Block, Eigen::Matrix<double, D, D>>;
+  using V = std::conditional_t<D == Eigen::Dynamic, Segment, Eigen::Matrix<double, D, 1>>;
+  const M F = F_block;
+  const V c = c_block, eta = eta_t;
+  const M identity = M::Identity(L_tt.rows(), L_tt.cols());
+  const Eigen::LLT<M> t_llt{M(L_tt)};
+  if (t_llt.info() != Eigen::Success) return "robot block information Λ_tt";
+  const M F_sigma = F * symmetric(M(t_llt.solve(identity)));  // F Σ_c
+  const Eigen::LLT<M> s_llt(symmetric(M(M(Q) + F_sigma * F.transpose())));
+  if (s_llt.info() != Eigen::Success) return "Q + F Λ_tt⁻¹ Fᵀ";
+  out.lambda_rr = symmetric(M(s_llt.solve(identity)));
+  out.gain = M(s_llt.solve(F_sigma));
+  out.eta_r = V(s_llt.solve(V(F_sigma * eta + c)));
+  const Eigen::LLT<M> q_llt{M(Q)};                      // positive definite: checked by the caller
+  const M A = symmetric(M(q_llt.solve(identity))) * F;  // Q⁻¹ F
+  out.omega.compute(Block(M(M(L_tt) + F.transpose() * A)));
+  if (out.omega.info() != Eigen::Success) return "robot block information Λ_tt + FᵀQ⁻¹F";
+  out.omega_inv_b = out.omega.solve(Segment(V(eta - A.transpose() * c)));
+  return nullptr;
+}
+
+const char* marginalise_robot(const Block& L_tt, const Segment& eta_t, const Block& F,
+                              const Block& Q, const Segment& c, RobotMarginalisation& out) {
+  switch (L_tt.rows()) {
+    case 12:
+      return marginalise_robot<12>(L_tt, eta_t, F, Q, c, out);
+    case 6:
+      return marginalise_robot<6>(L_tt, eta_t, F, Q, c, out);
+    default:
+      return marginalise_robot<Eigen::Dynamic>(L_tt, eta_t, F, Q, c, out);
+  }
 }
 
 template <class M>
@@ -143,6 +196,16 @@ Status Esdf::initialize(const Eigen::VectorXd& x0, const Eigen::MatrixXd& P0) {
 //   Λ_{t+1,j}   = A Ω⁻¹ Λ_tj                     for every neighbour j of x_t
 //   Λ_{jl}     −= Λ_jt Ω⁻¹ Λ_tl                  for neighbours j, l of x_t
 //   η_{t+1}     = Q⁻¹ c + A Ω⁻¹ b,   η_j −= Λ_jt Ω⁻¹ b.
+// Computed so, a step of a few milliseconds (Q⁻¹ ~ dt⁻³ ~ 1e10) forms the robot's block and
+// vector as differences of terms about 1e6 times larger than the result, and loses those
+// digits at every step (docs/consistency.md "The dead-reckoning baseline"). So the robot's
+// terms are computed in their Woodbury forms, with the robot's conditional covariance
+// Σ_c = Λ_tt⁻¹ (before augmentation) and S = Q + F Σ_c Fᵀ (push-through identity
+// (Λ + FᵀQ⁻¹F)⁻¹ FᵀQ⁻¹ = Λ⁻¹ Fᵀ (Q + F Λ⁻¹ Fᵀ)⁻¹):
+//   Λ_{t+1,t+1} = S⁻¹,   A Ω⁻¹ = S⁻¹ F Σ_c,   η_{t+1} = S⁻¹ (F Σ_c η_t + c),
+// sums of positive semi-definite terms and products. The neighbours' terms keep Ω: Ω⁻¹ is
+// small where Q is, and its Woodbury form Σ_c − Σ_c Fᵀ S⁻¹ F Σ_c would leave an error of the
+// size of Σ_c in it.
 // Only x_t's neighbours are touched. In the delayed-state chain x_t's only neighbour is the
 // newest delayed state (camera links join delayed states), so the fill-in is exactly the
 // robot–newest pair (ICRA 2005, Fig. 2). The mean of x_{t+1} is f(μ_t).
@@ -165,16 +228,15 @@ Status Esdf::predict(const Eigen::Ref<const Eigen::VectorXd>& f_of_mean,
   const Block Qb = Q;
   if (Status s = check_spd(Qb, where, "Q", &q_llt); !s.ok()) return s;
 
-  Block Qi = q_llt.solve(Block::Identity(d, d));
-  Qi = (0.5 * (Qi + Qi.transpose())).eval();
   const Block Fb = F;
-  const Block A = Qi * Fb;
   const Segment mu_t = mean_.segment(kRobotBlock);
   const Segment f = f_of_mean;
   const Segment c = f - Fb * mu_t;
-  const Block FtA = Fb.transpose() * A;
 
   if (keep_current) {
+    const Block Qi = symmetric(Block(q_llt.solve(Block::Identity(d, d))));
+    const Block A = Qi * Fb;
+    const Block FtA = Fb.transpose() * A;
     begin_stats();
     const int k = info_.add_block();
     eta_.append();
@@ -195,16 +257,13 @@ Status Esdf::predict(const Eigen::Ref<const Eigen::VectorXd>& f_of_mean,
   }
 
   // Marginalise x_t. Everything that can fail is computed before the first write.
-  const Block omega = info_.diagonal_block(kRobotBlock) + FtA;
-  Eigen::LLT<Block> o_llt(omega);
-  if (o_llt.info() != Eigen::Success) {
-    return Status::Error(StatusCode::kNumericalFailure,
-                         std::string(where) + ": robot block information Λ_tt + FᵀQ⁻¹F is not positive "
-                                 "definite; cannot marginalise");
+  RobotMarginalisation m;
+  if (const char* not_pd = marginalise_robot(info_.diagonal_block(kRobotBlock),
+                                             eta_.segment(kRobotBlock), Fb, Qb, c, m)) {
+    return Status::Error(
+        StatusCode::kNumericalFailure,
+        std::string(where) + ": " + not_pd + " is not positive definite; cannot marginalise");
   }
-  const Segment b = eta_.segment(kRobotBlock) - A.transpose() * c;
-  const Segment omega_inv_b = o_llt.solve(b);
-  const Block omega_inv_At = o_llt.solve(Block(A.transpose()));
   const int n_nbrs = info_.num_neighbours(kRobotBlock);
   scratch_nbrs_.resize(static_cast<size_t>(n_nbrs));
   scratch_lambda_tj_.resize(static_cast<size_t>(n_nbrs));
@@ -213,19 +272,19 @@ Status Esdf::predict(const Eigen::Ref<const Eigen::VectorXd>& f_of_mean,
     const auto ks = static_cast<size_t>(k);
     scratch_nbrs_[ks] = info_.neighbour(kRobotBlock, k);
     scratch_lambda_tj_[ks] = info_.neighbour_block(kRobotBlock, k);
-    scratch_w_[ks] = o_llt.solve(scratch_lambda_tj_[ks]);  // Ω⁻¹ Λ_tj
+    scratch_w_[ks] = m.omega.solve(scratch_lambda_tj_[ks]);  // Ω⁻¹ Λ_tj
   }
 
   begin_stats();
   info_.clear_row(kRobotBlock);
-  info_.add_to_block(kRobotBlock, kRobotBlock, Block(Qi - A * omega_inv_At));
-  eta_.mutable_segment(kRobotBlock) = Qi * c + A * omega_inv_b;
+  info_.add_to_block(kRobotBlock, kRobotBlock, m.lambda_rr);
+  eta_.mutable_segment(kRobotBlock) = m.eta_r;
   for (int k = 0; k < n_nbrs; ++k) {
     const auto ks = static_cast<size_t>(k);
     const int j = scratch_nbrs_[ks];
     const Block& L_tj = scratch_lambda_tj_[ks];
-    info_.add_to_block(kRobotBlock, j, Block(A * scratch_w_[ks]));
-    eta_.mutable_segment(j) -= L_tj.transpose() * omega_inv_b;
+    info_.add_to_block(kRobotBlock, j, Block(m.gain * L_tj));
+    eta_.mutable_segment(j) -= L_tj.transpose() * m.omega_inv_b;
     for (int l = k; l < n_nbrs; ++l) {
       const auto ls = static_cast<size_t>(l);
       info_.add_to_block(j, scratch_nbrs_[ls], Block(-(L_tj.transpose() * scratch_w_[ls])));

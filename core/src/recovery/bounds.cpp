@@ -34,9 +34,10 @@ Eigen::MatrixXd padded(const Eigen::MatrixXd& sigma, double tau) {
 }
 
 /// Relative rounding of the marginals that Λ holds after a prediction x_{t+1} = f(x_t) + w.
-/// The information form adds FᵀQ⁻¹F to Λ_tt and Q⁻¹ to the new robot block (esdf.cpp), and
-/// marginalising x_t cancels most of it again, so those blocks carry an absolute rounding of
-/// order ε‖FᵀQ⁻¹F‖ beside an information of order B⁻¹. The marginals of the stored Λ then
+/// The information form adds FᵀQ⁻¹F to Λ_tt (esdf.cpp), and marginalising x_t cancels most of
+/// it again in its neighbours' blocks (the robot's own block is formed without that difference,
+/// esdf.cpp), so those blocks carry an absolute rounding of order ε‖FᵀQ⁻¹F‖ beside an
+/// information of order B⁻¹. The marginals of the stored Λ then
 /// differ from the recursion F B Fᵀ + Q by a relative ρ ≈ ε λmax(B^½ FᵀQ⁻¹F B^½) <=
 /// ε tr(FᵀQ⁻¹F B) = ε tr(Q⁻¹ F B Fᵀ): 1e-7 to 1e-6 after the 5 ms steps that follow images on
 /// the default dive (Q ∝ dt³ in position), where the exact marginals fell below the recursion by
