@@ -1,6 +1,6 @@
 // Dead reckoning is the baseline of "SLAM against dead reckoning" (core/navigation/
-// dead_reckoning.h: the robot alone, in covariance form). On a simulated dive, fed what the
-// replay feeds it (dive-log source, decoders, time ordering):
+// dead_reckoning.h: the robot alone, in covariance form). On a simulated dive, fed the log's
+// measurements through the replay's dive-log source and decoders, in time order:
 // * It estimates what the information filter without links estimates: at every image its robot
 //   mean and covariance match a NavFilter that proposes no link and solves its delayed states
 //   exactly at every image (a factor kept equal to Λ).
@@ -11,54 +11,20 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <atomic>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <thread>
 #include <variant>
 #include <vector>
 
 #include "nav/core/navigation/chi_square.h"
 #include "nav/core/navigation/dead_reckoning.h"
-#include "nav/daemon/queue/measurement_queue.h"
-#include "nav/daemon/queue/time_ordering.h"
 #include "nav/daemon/replay/dive_replay.h"
-#include "nav/daemon/sources/dive_log_source.h"
 #include "support/sim_dive.h"
 
 namespace nav::sim::test {
 namespace {
 
 const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
-
-/// The log's measurements in the order the replay filters them.
-std::vector<daemon::Measurement> ordered_measurements(const std::string& log,
-                                                      const daemon::NavdConfig& cfg) {
-  daemon::MeasurementQueue queue(4096);
-  std::atomic<bool> stop{false}, done{false};
-  daemon::DiveLogSourceOptions source_options;
-  source_options.as_fast_as_possible = true;
-  std::thread source(
-      [&] { daemon::run_dive_log_source(log, cfg, source_options, queue, stop, done); });
-  daemon::TimeOrderingOptions ordering_options;
-  ordering_options.latency_window_us =
-      static_cast<std::int64_t>(cfg.filter.latency_window_ms * 1e3);
-  daemon::TimeOrderingBuffer ordering(ordering_options);
-  std::vector<daemon::Measurement> out, batch;
-  for (;;) {
-    const bool source_done = done.load();
-    batch.clear();
-    queue.pop_bulk(batch, 256);
-    for (const daemon::Measurement& m : batch) ordering.insert(m);
-    while (std::optional<daemon::Measurement> m = ordering.pop_ready()) out.push_back(*m);
-    if (source_done && batch.empty() && queue.size() == 0) break;
-    if (batch.empty()) std::this_thread::sleep_for(std::chrono::microseconds(200));
-  }
-  source.join();
-  while (std::optional<daemon::Measurement> m = ordering.pop_any()) out.push_back(*m);
-  return out;
-}
 
 /// The information filter without links, its delayed states solved exactly at every image.
 core::NavFilterOptions information_form_reference(core::NavFilterOptions o) {
@@ -93,7 +59,7 @@ TEST(SimDeadReckoning, IsTheFilterWithoutLinksFreeOfRoundingAndInsideItsCovarian
   simulate_dive(sim_options(dir, 5, 100), sim_config_path().string());
   const daemon::NavdConfig cfg = daemon::load_config_file((dir / "config.yaml").string());
   const std::vector<daemon::Measurement> ms =
-      ordered_measurements((dir / "dive.lcmlog").string(), cfg);
+      time_ordered_measurements((dir / "dive.lcmlog").string(), cfg);
   const core::NavFilterOptions options = daemon::filter_options_from_config(cfg);
 
   const core::DeadReckoningFilter dr = run_filter(core::DeadReckoningFilter(options), ms);

@@ -12,14 +12,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 
+#include "nav/core/navigation/nav_filter.h"
 #include "nav/daemon/filter/filter_options.h"
 #include "nav/daemon/filter/recovery_worker.h"
-#include "nav/daemon/queue/measurement_queue.h"
-#include "nav/core/navigation/nav_filter.h"
 #include "nav/daemon/sources/dive_log_source.h"
 #include "support/sim_dive.h"
 
@@ -37,16 +35,7 @@ FilterRun run_filter(const std::filesystem::path& dir, bool links, bool recovery
   const daemon::NavdConfig cfg = daemon::load_config_file((dir / "config.yaml").string());
   const std::string log = (dir / "dive.lcmlog").string();
   const daemon::RegistrationTable table = daemon::load_registrations(log);
-  daemon::MeasurementQueue queue(1 << 17);
-  std::atomic<bool> stop{false}, done{false};
-  daemon::DiveLogSourceOptions so;
-  so.as_fast_as_possible = true;
-  daemon::run_dive_log_source(log, cfg, so, queue, stop, done);
-  std::vector<daemon::Measurement> all;
-  queue.pop_bulk(all, 1 << 17);
-  std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) {
-    return daemon::validity_us(a) < daemon::validity_us(b);
-  });
+  const std::vector<daemon::Measurement> all = time_ordered_measurements(log, cfg);
   daemon::NavFilterOptions fo = daemon::filter_options_from_config(cfg);
   fo.propose_links = links;
   fo.recovery_thread = recovery_thread;

@@ -50,12 +50,13 @@ struct RobotMarginalisation {
   Segment omega_inv_b;      ///< Ω⁻¹ (η_t − FᵀQ⁻¹ c)
 };
 
-/// The terms from the old robot's block L_tt and vector eta_t, in D x D fixed-size arithmetic
-/// (Eigen::Dynamic: any block size); nullptr on success, else the matrix that is not positive
-/// definite.
+/// The terms from the old robot's block L_tt and vector eta_t (Qi = Q⁻¹), in D x D fixed-size
+/// arithmetic (Eigen::Dynamic: any block size); nullptr on success, else the matrix that is not
+/// positive definite.
 template <int D>
 const char* marginalise_robot(const Block& L_tt, const Segment& eta_t, const Block& F_block,
-                              const Block& Q, const Segment& c_block, RobotMarginalisation& out) {
+                              const Block& Q, const Block& Qi, const Segment& c_block,
+                              RobotMarginalisation& out) {
   using M = std::conditional_t<D == Eigen::Dynamic, Block, Eigen::Matrix<double, D, D>>;
   using V = std::conditional_t<D == Eigen::Dynamic, Segment, Eigen::Matrix<double, D, 1>>;
   const M F = F_block;
@@ -69,8 +70,7 @@ const char* marginalise_robot(const Block& L_tt, const Segment& eta_t, const Blo
   out.lambda_rr = symmetric(M(s_llt.solve(identity)));
   out.gain = M(s_llt.solve(F_sigma));
   out.eta_r = V(s_llt.solve(V(F_sigma * eta + c)));
-  const Eigen::LLT<M> q_llt{M(Q)};                      // positive definite: checked by the caller
-  const M A = symmetric(M(q_llt.solve(identity))) * F;  // Q⁻¹ F
+  const M A = M(Qi) * F;
   out.omega.compute(Block(M(M(L_tt) + F.transpose() * A)));
   if (out.omega.info() != Eigen::Success) return "robot block information Λ_tt + FᵀQ⁻¹F";
   out.omega_inv_b = out.omega.solve(Segment(V(eta - A.transpose() * c)));
@@ -78,14 +78,15 @@ const char* marginalise_robot(const Block& L_tt, const Segment& eta_t, const Blo
 }
 
 const char* marginalise_robot(const Block& L_tt, const Segment& eta_t, const Block& F,
-                              const Block& Q, const Segment& c, RobotMarginalisation& out) {
+                              const Block& Q, const Block& Qi, const Segment& c,
+                              RobotMarginalisation& out) {
   switch (L_tt.rows()) {
     case 12:
-      return marginalise_robot<12>(L_tt, eta_t, F, Q, c, out);
+      return marginalise_robot<12>(L_tt, eta_t, F, Q, Qi, c, out);
     case 6:
-      return marginalise_robot<6>(L_tt, eta_t, F, Q, c, out);
+      return marginalise_robot<6>(L_tt, eta_t, F, Q, Qi, c, out);
     default:
-      return marginalise_robot<Eigen::Dynamic>(L_tt, eta_t, F, Q, c, out);
+      return marginalise_robot<Eigen::Dynamic>(L_tt, eta_t, F, Q, Qi, c, out);
   }
 }
 
@@ -228,13 +229,13 @@ Status Esdf::predict(const Eigen::Ref<const Eigen::VectorXd>& f_of_mean,
   const Block Qb = Q;
   if (Status s = check_spd(Qb, where, "Q", &q_llt); !s.ok()) return s;
 
+  const Block Qi = symmetric(Block(q_llt.solve(Block::Identity(d, d))));
   const Block Fb = F;
   const Segment mu_t = mean_.segment(kRobotBlock);
   const Segment f = f_of_mean;
   const Segment c = f - Fb * mu_t;
 
   if (keep_current) {
-    const Block Qi = symmetric(Block(q_llt.solve(Block::Identity(d, d))));
     const Block A = Qi * Fb;
     const Block FtA = Fb.transpose() * A;
     begin_stats();
@@ -259,7 +260,7 @@ Status Esdf::predict(const Eigen::Ref<const Eigen::VectorXd>& f_of_mean,
   // Marginalise x_t. Everything that can fail is computed before the first write.
   RobotMarginalisation m;
   if (const char* not_pd = marginalise_robot(info_.diagonal_block(kRobotBlock),
-                                             eta_.segment(kRobotBlock), Fb, Qb, c, m)) {
+                                             eta_.segment(kRobotBlock), Fb, Qb, Qi, c, m)) {
     return Status::Error(
         StatusCode::kNumericalFailure,
         std::string(where) + ": " + not_pd + " is not positive definite; cannot marginalise");

@@ -32,13 +32,10 @@ Status DeadReckoningFilter::process(const Measurement& m) {
     return Status::Ok();
   }
   last_validity_us_ = t_us;
-  const auto min_step_us =
-      static_cast<std::int64_t>(std::llround(options_.min_predict_step_s * 1e6));
-  if (t_us - time_us_ >= min_step_us) {
-    const Status s = advance_in_steps(time_us_, t_us, options_.max_predict_step_s,
-                                      [this](double dt_s) { return predict(dt_s); });
-    if (!s.ok()) return s;
-  }
+  const Status advanced = advance_to_measurement(time_us_, t_us, options_.min_predict_step_s,
+                                                 options_.max_predict_step_s,
+                                                 [this](double dt_s) { return predict(dt_s); });
+  if (!advanced.ok()) return advanced;
   if (const auto* image = std::get_if<ImageEvent>(&m)) {
     ++counters_.images;
     ImageRecord& record = images_.emplace_back();

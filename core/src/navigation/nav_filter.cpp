@@ -167,11 +167,10 @@ Status NavFilter::process(const Measurement& m) {
   if (jobs_.due(t_us)) take_recovery_result();  // hand-off at a data time
   // Less than min_predict_step_s after the filter's time: applied at that time (a very short
   // prediction makes Q's pose block tiny and Λ ill-conditioned).
-  const auto min_step_us =
-      static_cast<std::int64_t>(std::llround(options_.min_predict_step_s * 1e6));
-  if (t_us - time_us_ >= min_step_us) {
-    if (Status s = advance_to(t_us); !s.ok()) return s;
-  }
+  const Status advanced = advance_to_measurement(
+      time_us_, t_us, options_.min_predict_step_s, options_.max_predict_step_s,
+      [this](double dt_s) { return predict_once(dt_s); });
+  if (!advanced.ok()) return advanced;
   pending_.resolve_due(registrations_, now_realtime_us_,
                        [this](PendingRegistrations::Entry& e, const RegistrationResult* reg) {
                          finish_pending(e, reg);
@@ -202,11 +201,6 @@ Status NavFilter::initialise(std::int64_t t_us) {
   time_us_ = t_us;
   last_validity_us_ = t_us;
   return Status::Ok();
-}
-
-Status NavFilter::advance_to(std::int64_t t_us) {
-  return advance_in_steps(time_us_, t_us, options_.max_predict_step_s,
-                          [this](double dt_s) { return predict_once(dt_s); });
 }
 
 Status NavFilter::predict_once(double dt_s) {

@@ -1,19 +1,25 @@
 #pragma once
 // Test helpers for the survey simulator: simulate a dive into a per-process temporary
-// directory, read truth.csv / images.csv back, and read the dive log's events.
+// directory, read truth.csv / images.csv back, and read the dive log's events and measurements.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "nav/core/geometry/types.h"
 #include "nav/daemon/config/config.h"
 #include "nav/daemon/log/dive_log.h"
+#include "nav/daemon/queue/measurement_queue.h"
+#include "nav/daemon/sources/dive_log_source.h"
 #include "nav/sim/simulate.h"
 
 namespace nav::sim::test {
@@ -114,6 +120,30 @@ inline std::vector<daemon::DiveLogEvent> read_log(const std::filesystem::path& d
   std::vector<daemon::DiveLogEvent> events;
   while (auto e = reader.next()) events.push_back(std::move(*e));
   return events;
+}
+
+/// Every measurement of a dive log through the replay's dive-log source (decoders and clock
+/// mappings of `cfg`), sorted by time of validity (ties in log order), none dropped.
+inline std::vector<daemon::Measurement> time_ordered_measurements(const std::string& log,
+                                                                  const daemon::NavdConfig& cfg) {
+  daemon::MeasurementQueue queue(4096);
+  std::atomic<bool> stop{false}, done{false};
+  daemon::DiveLogSourceOptions options;
+  options.as_fast_as_possible = true;
+  std::thread source([&] { daemon::run_dive_log_source(log, cfg, options, queue, stop, done); });
+  std::vector<daemon::Measurement> all;
+  for (bool finished = false; !finished;) {
+    finished = done.load();
+    if (queue.pop_bulk(all, 4096) == 0 && !finished) {
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+  }
+  source.join();
+  queue.pop_bulk(all, queue.size());
+  std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) {
+    return daemon::validity_us(a) < daemon::validity_us(b);
+  });
+  return all;
 }
 
 }  // namespace nav::sim::test

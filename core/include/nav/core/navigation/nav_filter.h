@@ -134,7 +134,6 @@ class NavFilter {
  private:
   Status try_initialise(const Measurement& m);
   Status initialise(std::int64_t t_us);
-  Status advance_to(std::int64_t t_us);
   Status predict_once(double dt_s);
   std::optional<Vec12> conditional_robot_mean() const;
   void relinearise_robot();

@@ -4,8 +4,9 @@
 // the two estimate the same thing and differ only in the form they keep it in.
 // * predict_robot: the constant-velocity model at the mean (constant_velocity.h), or the held
 //   step where the model cannot take it (below).
-// * advance_in_steps: a gap predicted in equal steps of at most max_step_s, with no short
-//   remainder step (a very short step makes Q's pose block tiny).
+// * advance_to_measurement: a measurement less than min_step_s after the robot's time is applied
+//   at that time; otherwise the gap is predicted in equal steps of at most max_step_s, with no
+//   short remainder step (a very short step makes Q's pose block tiny).
 //
 // The held step, taken when the constant-velocity model cannot step: the mean's pitch is
 // beyond +-kMaxAbsPitchRad (rotation.h), where the Euler-rate matrix J2 = d(rpy)/dt / omega
@@ -60,10 +61,13 @@ RobotPrediction held_prediction(const Vec12& x, double dt_s, const ConstantVeloc
 RobotPrediction predict_robot(const ConstantVelocityModel& process, const Vec12& x, double dt_s,
                               double lost_rate_sigma_radps);
 
-/// Advances time_us to t_us in ceil(gap / max_step) equal steps, calling step(dt_s) for each
-/// and moving time_us after each success; returns the first failing step's status.
+/// Brings time_us to a measurement at t_us: nothing when t_us − time_us < min_step_s (the
+/// measurement is applied at time_us); else ceil(gap / max_step_s) equal steps, calling
+/// step(dt_s) for each and moving time_us after each success. Returns the first failing
+/// step's status.
 template <class Step>
-Status advance_in_steps(std::int64_t& time_us, std::int64_t t_us, double max_step_s, Step&& step);
+Status advance_to_measurement(std::int64_t& time_us, std::int64_t t_us, double min_step_s,
+                              double max_step_s, Step&& step);
 
 }  // namespace nav::core
 
@@ -73,7 +77,11 @@ Status advance_in_steps(std::int64_t& time_us, std::int64_t t_us, double max_ste
 namespace nav::core {
 
 template <class Step>
-Status advance_in_steps(std::int64_t& time_us, std::int64_t t_us, double max_step_s, Step&& step) {
+Status advance_to_measurement(std::int64_t& time_us, std::int64_t t_us, double min_step_s,
+                              double max_step_s, Step&& step) {
+  if (t_us - time_us < static_cast<std::int64_t>(std::llround(min_step_s * 1e6))) {
+    return Status::Ok();
+  }
   const auto max_step_us =
       std::max<std::int64_t>(1, static_cast<std::int64_t>(std::llround(max_step_s * 1e6)));
   const std::int64_t steps = (t_us - time_us + max_step_us - 1) / max_step_us;
