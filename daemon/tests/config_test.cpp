@@ -107,6 +107,28 @@ TEST(Config, SimSection) {
             "sim.seeds");
 }
 
+TEST(Config, RealtimeSection) {
+  const RealtimeConfig off = parse_config(kMinimal).realtime;  // normal scheduling by default
+  EXPECT_EQ(off.device_priority, 0);
+  EXPECT_EQ(off.filter_priority, 0);
+  EXPECT_FALSE(off.lock_memory);
+  const RealtimeConfig on =
+      parse_config(std::string(kMinimal) +
+                   "realtime: {device_priority: 45, filter_priority: 20, lock_memory: true}\n")
+          .realtime;
+  EXPECT_EQ(on.device_priority, 45);
+  EXPECT_EQ(on.filter_priority, 20);
+  EXPECT_TRUE(on.lock_memory);
+  ConfigError e = expect_error(std::string(kMinimal) + "realtime: {device_priority: 100}\n");
+  EXPECT_EQ(e.key_path(), "realtime.device_priority");
+  e = expect_error(std::string(kMinimal) + "realtime: {filter_priority: -1}\n");
+  EXPECT_EQ(e.key_path(), "realtime.filter_priority");
+  e = expect_error(std::string(kMinimal) + "realtime: {lock_memory: sometimes}\n");
+  EXPECT_EQ(e.key_path(), "realtime.lock_memory");
+  EXPECT_EQ(expect_error(std::string(kMinimal) + "realtime: {priority: 1}\n").key_path(),
+            "realtime.priority");
+}
+
 TEST(Config, RegistrationKeys) {
   NavdConfig c = parse_config(kMinimal);
   EXPECT_DOUBLE_EQ(c.filter.registration_wait_s, 0.0);  // replay: a complete table
@@ -207,6 +229,9 @@ TEST(Config, RovYamlLoads) {
   EXPECT_TRUE(c.filter.recovery_keep_factor_equal);  // with the factor kept equal to Λ
   EXPECT_EQ(c.filter.recovery_refresh_interval, 10);
   EXPECT_DOUBLE_EQ(c.filter.registration_wait_s, 30.0);  // the vision stage answers later
+  EXPECT_GT(c.realtime.device_priority, c.realtime.filter_priority);  // devices preempt the filter
+  EXPECT_GT(c.realtime.filter_priority, 0);
+  EXPECT_TRUE(c.realtime.lock_memory);
   // Relative to rov.yaml's directory, loaded and validated with the config.
   EXPECT_EQ(can->signals_file, (config_dir() / "can/dvl_fog_example.yaml").string());
   EXPECT_FALSE(can->signals.messages.empty());

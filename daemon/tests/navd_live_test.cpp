@@ -9,8 +9,11 @@
 // a replayed log) are rejected and counted in the summary and in NAVD_HEALTH. With
 // lcm.registration_signing, unsigned, wrongly signed and stale answers are rejected before
 // (counted per reason), and a key file others can read stops navd naming the file and mode.
+// With a `realtime` section the device and filter threads run under SCHED_FIFO at the
+// configured priorities (read back from /proc) and memory is locked, or navd says why not.
 #include <gtest/gtest.h>
 #include <pty.h>
+#include <sched.h>
 #include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -22,7 +25,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <lcm/lcm-cpp.hpp>
+#include <map>
 #include <navlcm/health_t.hpp>
 #include <navlcm/nav_solution_t.hpp>
 #include <navlcm/registration_t.hpp>
@@ -198,6 +203,8 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
   EXPECT_EQ(j["devices"].get<int>(), 2);
   EXPECT_GE(j["measurements"].get<int>(), 20) << out;  // ~2 s of 10 Hz HDT + PHTRO, 5 Hz depth
   EXPECT_EQ(j["images"].get<int>(), 0);
+  EXPECT_EQ(j["realtime_threads"].get<int>(), 0) << out;  // no `realtime` section: normal
+  EXPECT_FALSE(j["memory_locked"].get<bool>()) << out;
   if (!udpm) {
     GTEST_SKIP() << (kNet.ok ? "udpm ttl=0 does not loop back in the test's namespace"
                              : kNet.reason)
@@ -225,6 +232,66 @@ TEST(NavdLive, DeviceSensorsFeedTheFilterAndSigtermStopsWithinOneSecond) {
   EXPECT_EQ(cholesky.info(), Eigen::Success) << P;
   EXPECT_LT(std::sqrt(P(5, 5)), 2.0 * M_PI / 180.0) << P;  // heading sigma
   EXPECT_LT(std::sqrt(P(2, 2)), 0.5) << P;                 // depth sigma
+}
+
+/// comm -> (policy, real-time priority) of every thread of `pid`, from /proc/<pid>/task/*/stat
+/// (proc(5): rt_priority and policy are fields 40 and 41, counted after the last ')').
+std::map<std::string, std::pair<int, int>> thread_policies(pid_t pid) {
+  std::map<std::string, std::pair<int, int>> out;
+  for (const auto& task : fs::directory_iterator("/proc/" + std::to_string(pid) + "/task")) {
+    std::string comm = slurp(task.path() / "comm"), stat = slurp(task.path() / "stat");
+    if (!comm.empty() && comm.back() == '\n') comm.pop_back();
+    std::istringstream fields(stat.substr(stat.rfind(')') + 2));
+    std::vector<std::string> f{std::istream_iterator<std::string>(fields), {}};
+    if (f.size() >= 39) out[comm] = {std::stoi(f[38]), std::stoi(f[37])};  // fields 41, 40
+  }
+  return out;
+}
+
+TEST(NavdLive, RealtimeSettingsRunDeviceAndFilterThreadsUnderFifoAndLockMemory) {
+  const fs::path dir = fs::temp_directory_path() / ("navd_rt_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  PtySensor heading("$HEHDT,41.87,T*25\r\n$PHTRO,0.03,M,0.15,B*59\r\n",
+                    std::chrono::milliseconds(100));
+  PtySensor depth("*000129.3918\r\n", std::chrono::milliseconds(200));
+  ASSERT_TRUE(heading.ok() && depth.ok()) << "openpty failed";
+  const fs::path config = dir / "rt.yaml";
+  std::ofstream(config)
+      << slurp(write_live_config(dir, heading, depth))
+      << "realtime: {device_priority: 40, filter_priority: 30, lock_memory: true}\n";
+  const pid_t pid = spawn_navd({"--config", config.string(), "--lcm-url", "memq://"}, dir);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  const auto threads = thread_policies(pid);
+  const std::string status = slurp("/proc/" + std::to_string(pid) + "/status");
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  EXPECT_EQ(wait_exit(pid, std::chrono::seconds(5)), 0);
+  const std::string out = slurp(dir / "navd.stdout"), err = slurp(dir / "navd.stderr");
+  fs::remove_all(dir);
+  const nlohmann::json j = nlohmann::json::parse(out);
+  EXPECT_GE(j["measurements"].get<int>(), 10) << out;  // navigating either way
+  for (const char* name : {"navd-heading", "navd-depth", "navd-filter", "navd-publisher"}) {
+    ASSERT_TRUE(threads.count(name)) << name << " not among navd's threads";
+  }
+  EXPECT_EQ(threads.at("navd-publisher"), std::make_pair(SCHED_OTHER, 0));
+  const std::size_t locked = status.find("VmLck:");
+  ASSERT_NE(locked, std::string::npos);
+  const long locked_kb = std::stol(status.substr(locked + 6));
+  const std::size_t rss = status.find("VmRSS:");
+  std::printf("navd: VmLck %ld kB, VmRSS %ld kB\n", locked_kb,
+              rss == std::string::npos ? -1L : std::stol(status.substr(rss + 6)));
+  EXPECT_EQ(j["memory_locked"].get<bool>(), locked_kb > 0) << status;
+  if (j["realtime_refused"].get<int>() > 0) {
+    // The kernel refused (no CAP_SYS_NICE, RLIMIT_RTPRIO too low): navd says why and runs on.
+    EXPECT_EQ(j["realtime_refused"].get<int>(), 3) << out;
+    EXPECT_NE(err.find("keeps normal scheduling: SCHED_FIFO priority"), std::string::npos) << err;
+    EXPECT_EQ(threads.at("navd-filter"), std::make_pair(SCHED_OTHER, 0));
+    GTEST_SKIP() << "SCHED_FIFO refused here: the refusal path was checked";
+  }
+  EXPECT_EQ(j["realtime_threads"].get<int>(), 3) << out;
+  EXPECT_EQ(threads.at("navd-heading"), std::make_pair(SCHED_FIFO, 40));
+  EXPECT_EQ(threads.at("navd-depth"), std::make_pair(SCHED_FIFO, 40));
+  EXPECT_EQ(threads.at("navd-filter"), std::make_pair(SCHED_FIFO, 30));
+  EXPECT_TRUE(j["memory_locked"].get<bool>()) << err;
 }
 
 constexpr const char* kKeyHex = "8f0e3c2b1a09f8e7d6c5b4a3928170615f4e3d2c1b0a9f8e7d6c5b4a39281706";

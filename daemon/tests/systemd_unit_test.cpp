@@ -1,6 +1,7 @@
 // systemd/navd.service: the directives a vehicle relies on (Type=notify,
 // WatchdogSec, Restart=on-failure, an unprivileged user, capabilities limited to what raw CAN
 // and real-time scheduling could need, hardening), ExecStart options navd really accepts,
+// the `realtime` settings of config/rov.yaml inside the unit's limits,
 // `systemd-analyze verify` on a copy whose ExecStart is the built navd, and the exposure of
 // `systemd-analyze security --offline=true` (not worse than the value in systemd/README.md).
 // Tests that need systemd-analyze skip with the reason when it is missing. Runs from the source
@@ -18,6 +19,8 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "nav/daemon/config/config.h"
 
 namespace {
 
@@ -151,6 +154,17 @@ TEST(SystemdUnit, CapabilitiesOnlyForRawCanAndRealtime) {
   if (!bounding.count("CAP_SYS_NICE")) {
     EXPECT_NE(single(unit, "Service", "LimitRTPRIO"), "");
     EXPECT_EQ(single(unit, "Service", "RestrictRealtime"), "no");
+  }
+}
+
+TEST(SystemdUnit, RovYamlsRealtimeSettingsAreWhatTheUnitAllows) {
+  const Unit unit = parse_unit(slurp(kUnitPath));
+  const nav::daemon::RealtimeConfig rt = nav::daemon::load_config_file("config/rov.yaml").realtime;
+  const int limit = std::stoi(single(unit, "Service", "LimitRTPRIO"));
+  EXPECT_LE(rt.device_priority, limit) << "navd would run its device threads unprioritised";
+  EXPECT_LE(rt.filter_priority, limit) << "navd would run its filter thread unprioritised";
+  if (rt.lock_memory) {
+    EXPECT_EQ(single(unit, "Service", "LimitMEMLOCK"), "infinity");
   }
 }
 

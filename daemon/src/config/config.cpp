@@ -1,4 +1,5 @@
-// navd config: ConfigError, the top-level document and the filter / lcm / checkpoint sections.
+// navd config: ConfigError, the top-level document and the filter / lcm / checkpoint /
+// realtime / sim / vision sections.
 // Schema in config.h and config/README.md.
 #include <filesystem>
 #include <fstream>
@@ -186,6 +187,15 @@ CheckpointConfig parse_checkpoint(const YamlReader& c) {
   return checkpoint;
 }
 
+RealtimeConfig parse_realtime(const YamlReader& r) {
+  r.expect_map({"device_priority", "filter_priority", "lock_memory"});
+  RealtimeConfig realtime;
+  r.read("device_priority", realtime.device_priority, 0, 99);
+  r.read("filter_priority", realtime.filter_priority, 0, 99);
+  if (r.has("lock_memory")) realtime.lock_memory = r.at("lock_memory").as_bool();
+  return realtime;
+}
+
 SimDiveConfig parse_sim(const YamlReader& c) {
   c.expect_map({"dive_dir", "seed", "images", "outlier_rate"});
   SimDiveConfig sim;
@@ -277,12 +287,13 @@ NavdConfig parse_config(const std::string& yaml_text, const std::string& source,
                           std::to_string(e.mark.column + 1) + ": " + e.msg);
   }
   const YamlReader doc(root, "", &source);
-  doc.expect_map({"sensors", "filter", "lcm", "checkpoint", "sim", "vision"});
+  doc.expect_map({"sensors", "filter", "lcm", "checkpoint", "realtime", "sim", "vision"});
   NavdConfig config;
   config.sensors = detail::parse_sensors(doc.at("sensors"), base_dir);
   if (doc.has("filter")) config.filter = parse_filter(doc.at("filter"));
   if (doc.has("lcm")) config.lcm = parse_lcm(doc.at("lcm"));
   if (doc.has("checkpoint")) config.checkpoint = parse_checkpoint(doc.at("checkpoint"));
+  if (doc.has("realtime")) config.realtime = parse_realtime(doc.at("realtime"));
   if (doc.has("sim")) config.sim = parse_sim(doc.at("sim"));
   if (doc.has("vision")) config.vision = parse_vision(doc.at("vision"));
   return config;

@@ -3,6 +3,8 @@
 
 #include <utility>
 
+#include "nav/daemon/system/realtime.h"
+
 namespace nav::daemon {
 
 RecoveryWorker::RecoveryWorker(int block_dim, const core::StateRecoveryOptions& options,
@@ -12,7 +14,10 @@ RecoveryWorker::RecoveryWorker(int block_dim, const core::StateRecoveryOptions& 
       hook_(std::move(hook)),
       recovery_(block_dim, options),
       lambda_(block_dim) {
-  thread_ = std::thread([this] { run(); });
+  thread_ = std::thread([this] {
+    name_this_thread("navd-recovery");
+    run();
+  });
 }
 
 RecoveryWorker::~RecoveryWorker() {

@@ -26,6 +26,7 @@
 #include "nav/daemon/service/solution_board.h"
 #include "nav/daemon/service/vision_answers.h"
 #include "nav/daemon/sources/device_sources.h"
+#include "nav/daemon/system/realtime.h"
 
 namespace nav::daemon::service {
 namespace {
@@ -163,6 +164,18 @@ int wait_for_end(const sigset_t& signals, const std::atomic<bool>& filter_done,
   return 0;
 }
 
+/// realtime.lock_memory: locks every page of the process in RAM; whether it did (a refusal is
+/// logged and navd goes on).
+bool lock_memory(const daemon::RealtimeConfig& realtime) {
+  if (!realtime.lock_memory) return false;
+  if (std::string why = daemon::lock_all_memory(); !why.empty()) {
+    spdlog::warn("navd: memory not locked: {}", why);
+    return false;
+  }
+  spdlog::info("navd: memory locked (mlockall, current and future pages)");
+  return true;
+}
+
 /// Ends the process with `code` without waiting for the device threads still inside a device
 /// call (destroying their objects under them is not an option): logs which, flushes, _Exit.
 [[noreturn]] void end_abandoning(const std::vector<std::string>& sensors, int code) {
@@ -193,6 +206,7 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
   if (!config.lcm.registration_signing.key_file.empty()) {
     key = daemon::load_signing_key(config.lcm.registration_signing.key_file);
   }
+  const bool memory_locked = lock_memory(config.realtime);
   LiveFilter live = make_live_filter(config, args.checkpoints);
   if (key && live.vision_answers) live.vision_answers->set_signing_key(*key);
   daemon::MeasurementQueue queue(kQueueCapacity);
@@ -212,11 +226,14 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
         "vision stage, so live mode accepts no camera link (config/README.md)");
   }
 
+  daemon::RealtimeTally filter_realtime;
   std::atomic<bool> stop{false}, filter_done{false};
   std::uint64_t dropped_late = 0;  ///< the filter thread's; read after it is joined
   std::string failure;
   const auto start = Clock::now();
   std::thread filter_thread([&] {
+    daemon::name_this_thread("navd-filter");
+    filter_realtime.enter("filter", config.realtime.filter_priority);
     try {
       failure = filter_loop(config, queue, live, links, stop, dropped_late);
     } catch (const std::exception& e) {
@@ -224,7 +241,10 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
     }
     filter_done.store(true);
   });
-  std::thread publisher_thread([&] { publisher.run(stop); });
+  std::thread publisher_thread([&] {
+    daemon::name_this_thread("navd-publisher");
+    publisher.run(stop);
+  });
   registrations.start(stop);
   const std::size_t device_threads = devices.start(stop);
   spdlog::info("navd: live on {} device threads ({})", device_threads, args.config_path);
@@ -241,11 +261,15 @@ int run_live_mode(const daemon::NavdConfig& config, const LiveModeArgs& args,
   const daemon::NavFilterCounters& counters = live.slam->counters();
   std::printf(
       "{\"mode\":\"live\",\"measurements\":%llu,\"images\":%zu,\"links\":%zu,"
-      "\"devices\":%zu,\"queue_dropped\":%llu,\"dropped_late\":%llu,\"wall_s\":%.3f%s}\n",
+      "\"devices\":%zu,\"queue_dropped\":%llu,\"dropped_late\":%llu,\"realtime_threads\":%d,"
+      "\"realtime_refused\":%d,\"memory_locked\":%s,\"wall_s\":%.3f%s}\n",
       static_cast<unsigned long long>(counters.measurements), live.slam->images().size(),
       live.slam->links().size(), device_threads,
       static_cast<unsigned long long>(queue.total_dropped()),
-      static_cast<unsigned long long>(dropped_late), seconds_since(start),
+      static_cast<unsigned long long>(dropped_late),
+      devices.realtime().granted() + filter_realtime.granted(),
+      devices.realtime().refused() + filter_realtime.refused(), memory_locked ? "true" : "false",
+      seconds_since(start),
       registration_summary_json(*live.inbox, registrations, *live.slam).c_str());
   std::fflush(stdout);
   const int code = failure.empty() ? 0 : 1;

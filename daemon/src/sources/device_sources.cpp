@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "nav/daemon/sources/camera_source.h"
+#include "nav/daemon/system/realtime.h"
 #include "nav/drivers/transports/gige_camera.h"
 #include "nav/drivers/transports/serial_port.h"
 #include "nav/drivers/transports/v4l2_camera.h"
@@ -100,6 +101,11 @@ std::size_t DeviceSources::start(const std::atomic<bool>& stop) {
   for (auto& device : devices_) {
     Device* d = device.get();
     threads_.emplace_back([this, d, &stop] {
+      name_this_thread("navd-" + d->sensor.name);
+      // Cameras keep normal scheduling: their frames carry the camera's or Aravis' stream
+      // thread's time, and their threads convert and write whole images.
+      if (!is_camera(d->sensor.type))
+        realtime_.enter(d->sensor.name, config_.realtime.device_priority);
       run(*d, stop);
       d->finished.store(true);
     });

@@ -159,11 +159,20 @@ struct SimDiveConfig {
   double outlier_rate = 0.05;  ///< [0, 1], fraction of registrations that are outliers
 };
 
+/// `realtime` (live mode only; nav/daemon/system/realtime.h): SCHED_FIFO priorities, 0 = normal
+/// scheduling, each in [0, 99]; the serial and CAN device threads should be above the filter's.
+struct RealtimeConfig {
+  int device_priority = 0;   ///< serial and CAN device threads (they date records on arrival)
+  int filter_priority = 0;   ///< the filter thread
+  bool lock_memory = false;  ///< mlockall(MCL_CURRENT | MCL_FUTURE) at start
+};
+
 struct NavdConfig {
   std::vector<SensorConfig> sensors;  ///< required, at least one
   FilterConfig filter;
   LcmConfig lcm;
   CheckpointConfig checkpoint;
+  RealtimeConfig realtime;
   std::optional<SimDiveConfig> sim;  ///< the `sim` section, if present
   VisionConfig vision;               ///< the `vision` section (vision_config.h)
 };

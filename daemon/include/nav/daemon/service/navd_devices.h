@@ -46,6 +46,7 @@ class NavdDevices {
     return sources_->join_until(deadline);
   }
   daemon::SensorHealthBoard& health() { return health_; }
+  const daemon::RealtimeTally& realtime() const { return sources_->realtime(); }
 
  private:
   daemon::SensorHealthBoard health_;

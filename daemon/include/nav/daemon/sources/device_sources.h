@@ -1,7 +1,9 @@
 #pragma once
 // navd's device threads: one per configured sensor with a hardware transport (serial, can,
 // gige, v4l2; `sim` sensors have none), built from the config and run with the loops of
-// device_source.h and camera_source.h. Owns the transports, decoders, producers and threads.
+// device_source.h and camera_source.h. Each thread is named navd-<sensor> (cut to 15 bytes);
+// serial and CAN threads run under SCHED_FIFO at config.realtime.device_priority when set.
+// Owns the transports, decoders, producers and threads.
 //
 // Usage (navd main): construct after the MeasurementQueue and the SensorHealthBoard, start(stop),
 // ..., set stop, join(). Raw bytes and NAV_IMAGE are published on `lcm` (may be null).
@@ -19,6 +21,7 @@
 #include "nav/daemon/queue/measurement_queue.h"
 #include "nav/daemon/sources/device_source.h"
 #include "nav/daemon/sources/sensor_health.h"
+#include "nav/daemon/system/realtime.h"
 
 namespace nav::daemon {
 
@@ -50,6 +53,8 @@ class DeviceSources {
   std::vector<std::string> join_until(std::chrono::steady_clock::time_point deadline);
   std::size_t size() const { return threads_.size(); }
   const LcmRawPublisher& publisher() const { return publisher_; }
+  /// The serial and CAN threads' SCHED_FIFO requests (config.realtime.device_priority).
+  const RealtimeTally& realtime() const { return realtime_; }
 
  private:
   struct Device;
@@ -61,6 +66,7 @@ class DeviceSources {
   DeviceSourcesOptions options_;
   LcmRawPublisher publisher_;
   std::vector<std::unique_ptr<Device>> devices_;
+  RealtimeTally realtime_;
   std::vector<std::thread> threads_;
 };
 
