@@ -24,6 +24,7 @@
 #include "nav/daemon/config/config.h"
 #include "nav/daemon/service/live_mode.h"
 #include "nav/daemon/service/replay_mode.h"
+#include "nav/daemon/system/realtime.h"
 #include "nav/daemon/system/sd_notify.h"
 #include "nav/daemon/system/stop_signals.h"
 #include "nav/daemon/system/wall_clock.h"
@@ -110,6 +111,7 @@ int main(int argc, char** argv) {
   // First of all, so that a SIGTERM during start-up (config, resume) is held
   // pending for the mode's wait instead of killing the process with its default action.
   const sigset_t signals = daemon::block_stop_signals();
+  daemon::keep_freed_memory();
   spdlog::set_default_logger(spdlog::stderr_color_mt("navd"));
   CLI::App app{"navd: navigation daemon (view-based SLAM information filter, ESDF)"};
   Args args;

@@ -3,6 +3,7 @@
 // Each subcommand registers itself from its own cmd_<name>.cpp; see commands.h.
 #include <cstdio>
 
+#include "nav/daemon/system/realtime.h"
 #include "navtool/commands.h"
 
 namespace nav::tool {
@@ -13,6 +14,7 @@ std::map<std::string, AddCommandFn>& command_registry() {
 }  // namespace nav::tool
 
 int main(int argc, char** argv) {
+  nav::daemon::keep_freed_memory();  // replays: no page faults for buffers allocated again
   CLI::App app{"navtool: offline tools for the navd navigation daemon"};
   app.require_subcommand(1);
   for (const auto& [name, add] : nav::tool::command_registry()) add(app);

@@ -1,15 +1,19 @@
 // Real-time scheduling of navd's threads (nav/daemon/system/realtime.h): the priority a thread
 // asks for is the one the kernel runs it at, a refusal says why, and navd.service's mechanism
 // (no capability, RLIMIT_RTPRIO 50) allows exactly the priorities up to 50. The unprivileged
-// case runs in a forked child that drops to user nobody with the unit's limit.
+// case runs in a forked child that drops to user nobody with the unit's limit. keep_freed_memory
+// is checked through mallinfo2 in a child of its own.
 #include "nav/daemon/system/realtime.h"
 
 #include <gtest/gtest.h>
+#include <malloc.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <array>
+#include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <string>
 #include <thread>
@@ -141,6 +145,32 @@ TEST(Realtime, TheTallyCountsGrantsAndRefusals) {
   });
   EXPECT_EQ(tally.granted(), granted.empty() ? 1 : 0) << granted;
   EXPECT_EQ(tally.refused(), granted.empty() ? 1 : 2) << granted;
+}
+
+/// In a forked child (malloc settings are per process): with or without keep_freed_memory, a
+/// 64 MiB block allocated, then freed. Exit code bit 0: the block was mmapped (mallinfo2's
+/// hblkhd); bit 1: the heap still held it after free (arena); bit 2: a setting was refused.
+int large_block_fate(bool keep) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    int code = keep && !keep_freed_memory() ? 4 : 0;
+    constexpr std::size_t kBytes = 64u << 20;
+    static void* volatile block;  // volatile: the allocation is not elided
+    block = std::malloc(kBytes);
+    std::memset(block, 1, kBytes);
+    if (::mallinfo2().hblkhd >= kBytes) code |= 1;
+    std::free(block);
+    if (::mallinfo2().arena >= kBytes) code |= 2;
+    ::_exit(code);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(Realtime, KeepFreedMemoryServesLargeBlocksFromTheHeapAndKeepsThem) {
+  EXPECT_EQ(large_block_fate(false), 1);  // glibc's default: mmapped, unmapped at free
+  EXPECT_EQ(large_block_fate(true), 2);   // from the heap, kept for the next allocation
 }
 
 TEST(Realtime, LockingMemoryLocksItOrSaysWhyNot) {

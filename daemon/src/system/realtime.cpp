@@ -1,6 +1,7 @@
 // Real-time scheduling and memory locking (nav/daemon/system/realtime.h).
 #include "nav/daemon/system/realtime.h"
 
+#include <malloc.h>
 #include <pthread.h>
 #include <sched.h>
 #include <spdlog/spdlog.h>
@@ -72,6 +73,12 @@ std::string lock_all_memory() {
            " bytes; navd.service's LimitMEMLOCK=infinity lifts it)";
   }
   return why;
+}
+
+bool keep_freed_memory() {
+  const bool no_mmap = ::mallopt(M_MMAP_MAX, 0) == 1;
+  const bool no_trim = ::mallopt(M_TRIM_THRESHOLD, -1) == 1;
+  return no_mmap && no_trim;
 }
 
 void RealtimeTally::enter(std::string_view thread, int priority) {

@@ -41,6 +41,14 @@ std::string thread_policy_text();
 /// else why not (with RLIMIT_MEMLOCK when that is the cause).
 std::string lock_all_memory();
 
+/// glibc malloc keeps what is freed: every block comes from the heap (M_MMAP_MAX 0) and the heap
+/// is never trimmed (M_TRIM_THRESHOLD -1), so a large block freed and allocated again (the
+/// recovery's and the renewals' buffers, CHOLMOD's columns) reuses pages already faulted in,
+/// and locked, instead of fresh mmaps the kernel must zero and fault page by page. The process
+/// keeps its high-water mark of heap (docs/performance.md "Freed memory kept"). Call once at
+/// start, before other threads; false if glibc refused a setting.
+bool keep_freed_memory();
+
 /// What the live threads got: each thread that asks calls enter() once; the counts go into
 /// navd's summary.
 class RealtimeTally {
