@@ -32,6 +32,7 @@
 #include <navlcm/nav_solution_t.hpp>
 #include <navlcm/registration_t.hpp>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -39,6 +40,7 @@
 
 #include "nav/daemon/filter/registration_signature.h"
 #include "nav/daemon/system/host_clock.h"
+#include "nav/daemon/system/process_usage.h"
 #include "support/navd_process.h"
 #include "support/net_namespace.h"
 #include "support/udpm_probe.h"
@@ -273,13 +275,11 @@ TEST(NavdLive, RealtimeSettingsRunDeviceAndFilterThreadsUnderFifoAndLockMemory) 
     ASSERT_TRUE(threads.count(name)) << name << " not among navd's threads";
   }
   EXPECT_EQ(threads.at("navd-publisher"), std::make_pair(SCHED_OTHER, 0));
-  const std::size_t locked = status.find("VmLck:");
-  ASSERT_NE(locked, std::string::npos);
-  const long locked_kb = std::stol(status.substr(locked + 6));
-  const std::size_t rss = status.find("VmRSS:");
-  std::printf("navd: VmLck %ld kB, VmRSS %ld kB\n", locked_kb,
-              rss == std::string::npos ? -1L : std::stol(status.substr(rss + 6)));
-  EXPECT_EQ(j["memory_locked"].get<bool>(), locked_kb > 0) << status;
+  const std::optional<double> locked_kb = nav::daemon::parse_proc_status_kb(status, "VmLck");
+  ASSERT_TRUE(locked_kb.has_value()) << status;
+  std::printf("navd: VmLck %.0f kB, VmRSS %.0f kB\n", *locked_kb,
+              nav::daemon::parse_proc_status_kb(status, "VmRSS").value_or(-1.0));
+  EXPECT_EQ(j["memory_locked"].get<bool>(), *locked_kb > 0) << status;
   if (j["realtime_refused"].get<int>() > 0) {
     // The kernel refused (no CAP_SYS_NICE, RLIMIT_RTPRIO too low): navd says why and runs on.
     EXPECT_EQ(j["realtime_refused"].get<int>(), 3) << out;

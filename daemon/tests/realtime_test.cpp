@@ -15,8 +15,11 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <thread>
+
+#include "nav/daemon/system/process_usage.h"
 
 namespace nav::daemon {
 namespace {
@@ -178,12 +181,9 @@ TEST(Realtime, LockingMemoryLocksItOrSaysWhyNot) {
   const pid_t pid = ::fork();
   if (pid == 0) {
     const std::string why = lock_all_memory();
-    std::ifstream status("/proc/self/status");
-    std::string line;
-    long locked_kb = 0;
-    while (std::getline(status, line)) {
-      if (line.rfind("VmLck:", 0) == 0) locked_kb = std::stol(line.substr(6));
-    }
+    std::ostringstream status;
+    status << std::ifstream("/proc/self/status").rdbuf();
+    const double locked_kb = parse_proc_status_kb(status.str(), "VmLck").value_or(0.0);
     // 0: locked with pages counted; 2: refused with RLIMIT_MEMLOCK named; else failure.
     if (why.empty()) ::_exit(locked_kb > 0 ? 0 : 1);
     ::_exit(why.find("RLIMIT_MEMLOCK") != std::string::npos ? 2 : 3);
