@@ -89,7 +89,7 @@ TEST(NavdCheckpoints, KilledReplayResumesToTheUninterruptedMap) {
   const auto recovery = config.find(kept);
   ASSERT_NE(recovery, std::string::npos) << "simulated config.yaml changed";
   config.replace(recovery, kept.size(), "recovery_preconditioner: block_jacobi");
-  const std::string lag = "recovery_renewal_lag: 8";  // a setting of the kept factor only
+  const std::string lag = "recovery_renewal_lag: 16";  // a setting of the kept factor only
   const auto lag_at = config.find(lag);
   ASSERT_NE(lag_at, std::string::npos) << "simulated config.yaml changed";
   config.replace(lag_at, lag.size(), "recovery_renewal_lag: 0");

@@ -3,7 +3,7 @@
 // moment (core/recovery/time_of_use.h), with the factor kept equal to Λ and the exact marginals
 // renewed every 10 images, on the filter thread and on the recovery thread, and with
 // config/sim.yaml's renewals (as the number of states passes the powers of 1.25, then every 40
-// images, each of those taken 8 images later).
+// images, each of those taken 16 images later).
 //
 // What each check guards:
 //   * between renewals the exact marginals of the stored Λ drift up by the rounding of the
@@ -77,7 +77,7 @@ TEST(SimTimeOfUse, KeptFactorOnTheRecoveryThreadIsAsTight) {
 }
 
 // Renewed as the number of states passes the powers of 1.25 while the map is small, then every
-// 40 images, each of those taken 8 images later. Without the powers the median was 1.58 here.
+// 40 images, each of those taken 16 images later. Without the powers the median was 1.58 here.
 TEST(SimTimeOfUse, SimYamlRenewalsAreTightAndConservativeAtEveryImage) {
   expect_tight_and_conservative(checked_dive("sim_yaml", false, -1));
 }
