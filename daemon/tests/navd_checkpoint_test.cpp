@@ -89,10 +89,11 @@ TEST(NavdCheckpoints, KilledReplayResumesToTheUninterruptedMap) {
   const auto recovery = config.find(kept);
   ASSERT_NE(recovery, std::string::npos) << "simulated config.yaml changed";
   config.replace(recovery, kept.size(), "recovery_preconditioner: block_jacobi");
-  const std::string lag = "recovery_renewal_lag: 16";  // a setting of the kept factor only
+  // The lag is a setting of the kept factor only; whatever sim.yaml's value, it becomes 0.
+  const std::string lag = "recovery_renewal_lag:";
   const auto lag_at = config.find(lag);
   ASSERT_NE(lag_at, std::string::npos) << "simulated config.yaml changed";
-  config.replace(lag_at, lag.size(), "recovery_renewal_lag: 0");
+  config.replace(lag_at, config.find('\n', lag_at) - lag_at, lag + " 0");
   std::ofstream(root / "config.yaml") << config;
 
   auto navd = [&](const std::string& extra, const std::string& out, const std::string& log) {

@@ -77,7 +77,8 @@ TEST(SimTimeOfUse, KeptFactorOnTheRecoveryThreadIsAsTight) {
 }
 
 // Renewed as the number of states passes the powers of 1.25 while the map is small, then every
-// 40 images, each of those taken 16 images later. Without the powers the median was 1.58 here.
+// 40 images, each of those taken 16 images later. Without the powers (and a lag of 8) the median
+// was 1.58 here.
 TEST(SimTimeOfUse, SimYamlRenewalsAreTightAndConservativeAtEveryImage) {
   expect_tight_and_conservative(checked_dive("sim_yaml", false, -1));
 }
